@@ -1,0 +1,56 @@
+"""The ``isu-validate`` command: one entry point, one module per subcommand in ``commands/``."""
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+# Each module in isu_validate/commands/ defines `register(subparsers)`, which adds its
+# subcommand(s) and sets `func` (called with the parsed args, returns an exit code).
+COMMAND_MODULES = [
+    "run",        # run, export (search + crash-safe archive)
+    "bench",      # bench search|render|...
+]
+
+
+class UserError(Exception):
+    """A problem the user can fix; printed without a traceback."""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="isu-validate",
+        description="Search-based testing of VLM in-car scene understanding, validated against the real world.")
+    parser.add_argument("--version", action="version", version=_version())
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name in COMMAND_MODULES:
+        importlib.import_module(f"isu_validate.commands.{name}").register(sub)
+    return parser
+
+
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+    try:
+        return version("isu-validate")
+    except PackageNotFoundError:
+        return "unknown"
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "func", None):
+        parser.print_help()
+        return 2
+    try:
+        return int(args.func(args) or 0)
+    except KeyboardInterrupt:
+        print("interrupted; everything evaluated so far is saved (resume with --resume)", file=sys.stderr)
+        return 130
+    except (UserError, FileNotFoundError, ValueError) as exc:  # SpaceError is a ValueError
+        print(f"isu-validate {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

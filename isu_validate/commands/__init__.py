@@ -1,0 +1,1 @@
+"""Subcommands of ``isu-validate``; see ``isu_validate.cli.COMMAND_MODULES``."""

@@ -1,0 +1,8 @@
+"""The scene space: declarative features, activity, constraints, encoding."""
+from .errors import SpaceError
+from .features import Feature
+from .loader import DEFAULT_SPACE, load_space, space_from_dict
+from .space import Constraint, Question, Scene, SceneSpace
+
+__all__ = ["DEFAULT_SPACE", "Constraint", "Feature", "Question", "Scene", "SceneSpace", "SpaceError",
+           "load_space", "space_from_dict"]

@@ -1,0 +1,2 @@
+class SpaceError(ValueError):
+    """A scene-space file or a scene that breaks the space's rules."""
