@@ -50,7 +50,8 @@ class SceneSpace:
         self.constraints: tuple[Constraint, ...] = tuple(constraints)
         self.prompt_rules: tuple[str, ...] = tuple(prompt_rules)
         self.names: tuple[str, ...] = tuple(self.features)
-        self._discrete_mask = np.array([f.discrete and f.type == "categorical" for f in self.features.values()])
+        categorical = np.array([f.type == "categorical" for f in self.features.values()])
+        self._distance_scale = np.where(categorical, 1e4, 1.0)
 
     # ------------------------------------------------------------------ identity
     def to_dict(self) -> dict:
@@ -188,11 +189,18 @@ class SceneSpace:
         (|a-b|/range), a feature active in only one of the two counts 1, inactive in both 0."""
         if len(others) == 0:
             return np.zeros(0)
-        a_nan, b_nan = np.isnan(vector), np.isnan(others)
-        diff = np.abs(np.nan_to_num(others) - np.nan_to_num(vector))
-        diff = np.where(self._discrete_mask, diff > 1e-12, diff).astype(float)
-        diff = np.where(a_nan ^ b_nan, 1.0, np.where(a_nan & b_nan, 0.0, diff))
-        return diff.mean(axis=1)
+        return self.distances_sentinel(self.distance_rows(vector), self.distance_rows(others))
+
+    def distances_sentinel(self, vector: np.ndarray, others: np.ndarray) -> np.ndarray:
+        """``distances`` for vectors prepared by ``distance_rows`` (no NaN: fast)."""
+        return np.minimum(np.abs(others - vector), 1.0).mean(axis=1)
+
+    def distance_rows(self, vectors: np.ndarray) -> np.ndarray:
+        """Canonical vectors scaled so that ``min(|a-b|, 1)`` is the per-feature distance:
+        an inactive feature becomes ``INACTIVE`` (>= 2 away from any active value), and
+        categorical columns are stretched so that any mismatch exceeds 1."""
+        scaled = np.where(np.isnan(vectors), INACTIVE, vectors) * self._distance_scale
+        return scaled.astype(np.float32)
 
     # ------------------------------------------------------------------ questions
     def questions(self, scene: Mapping[str, Any]) -> list[Question]:
@@ -206,8 +214,7 @@ class SceneSpace:
         return [f for f in self.features.values() if f.predicted]
 
 
-def term_feature_names(conditions: Iterable[Condition]) -> set[str]:
-    return {t.feature for c in conditions for t in c.terms}
+INACTIVE = 3.0  # stands for "feature absent" in distance computations (outside [0, 1])
 
 
-__all__ = ["SceneSpace", "Constraint", "Question", "Scene", "Term", "term_feature_names"]
+__all__ = ["INACTIVE", "SceneSpace", "Constraint", "Question", "Scene", "Term"]

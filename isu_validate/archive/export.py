@@ -1,0 +1,59 @@
+"""The tests table of a run as CSV (ARCHITECTURE.md contract), one row per evaluated test."""
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+from typing import IO
+
+from .store import Archive, TestRecord
+
+BASE_COLUMNS = ["test_id", "algorithm", "seed", "generation"]
+TAIL_COLUMNS = ["f_div", "failed", "sut_error", "render_error", "render_s", "sut_s", "image"]
+
+
+def _feature_names(run_dir: Path) -> tuple[list[str], list[str]]:
+    """All features, and the predicted ones (the SUT's answers exist only for those)."""
+    features = json.loads((run_dir / "run.json").read_text())["space"]["features"]
+    return list(features), [n for n, f in features.items() if f.get("predicted")]
+
+
+def rows(run_dir: Path) -> tuple[list[str], list[dict]]:
+    run_dir = Path(run_dir)
+    archive_path = run_dir / "archive.sqlite"
+    if not archive_path.exists():
+        raise FileNotFoundError(f"{run_dir} is not a run directory (no archive.sqlite); give the folder `run --out` wrote")
+    features, predicted = _feature_names(run_dir)
+    archive = Archive(archive_path)
+    try:
+        records = list(archive)
+    finally:
+        archive.close()
+    fitness_keys = sorted({k for r in records for k in r.fitness})
+    columns = (BASE_COLUMNS + [f"x.{f}" for f in features] + [f"y.{f}" for f in predicted]
+               + fitness_keys + TAIL_COLUMNS)
+    return columns, [_row(r, features, predicted, fitness_keys) for r in records]
+
+
+def _row(record: TestRecord, features: list[str], predicted: list[str], fitness_keys: list[str]) -> dict:
+    row = {"test_id": record.test_id, "algorithm": record.algorithm, "seed": record.seed,
+           "generation": record.generation}
+    answers = record.answers or {}
+    for f in features:
+        row[f"x.{f}"] = record.canonical.get(f, "")
+    for f in predicted:
+        row[f"y.{f}"] = answers.get(f, "")
+    for k in fitness_keys:
+        row[k] = record.fitness.get(k, "")
+    row.update(f_div=round(record.f_div, 6), failed=int(record.failed), sut_error=record.sut_error or "",
+               render_error=record.render_error or "", render_s=record.render_s or "", sut_s=record.sut_s or "",
+               image=record.image or "")
+    return row
+
+
+def write_csv(run_dir: Path, out: IO[str]) -> int:
+    columns, data = rows(run_dir)
+    writer = csv.DictWriter(out, fieldnames=columns)
+    writer.writeheader()
+    writer.writerows(data)
+    return len(data)

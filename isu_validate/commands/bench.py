@@ -1,0 +1,20 @@
+"""``isu-validate bench ...``: benchmarks that print speed against error.
+
+Each area adds its own benchmark: a module in BENCH_MODULES defines
+``register_bench(subparsers)`` adding e.g. ``bench search`` or ``bench render``.
+"""
+from __future__ import annotations
+
+import importlib
+
+BENCH_MODULES = [
+    "isu_validate.search.bench",
+]
+
+
+def register(sub) -> None:
+    parser = sub.add_parser("bench", help="benchmarks: speed against error")
+    bench_sub = parser.add_subparsers(dest="bench", metavar="BENCH")
+    for name in BENCH_MODULES:
+        importlib.import_module(name).register_bench(bench_sub)
+    parser.set_defaults(func=lambda args: parser.print_help() or 2)

@@ -1,0 +1,176 @@
+"""Evaluating one test: render the scene, ask the SUT, judge the answer.
+
+A ``Pipeline`` is built once per process from a picklable ``PipelineConfig`` (so a
+process pool or a Dask worker each builds its own renderer and SUT client) and turns
+a ``Job`` into a ``TestRecord``.  Which renderer, SUT and judge are used is decided by
+``config.factory`` (``module:function``); the default builds the real ones.
+"""
+from __future__ import annotations
+
+import importlib
+import json
+import time
+import traceback
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+from .archive import TestRecord
+from .protocols import RenderError, SUTResponse
+from .space import SceneSpace, load_space
+
+
+@dataclass(frozen=True)
+class PipelineConfig:
+    run_dir: str
+    space: str = "isu-paper"
+    sut: str = "reference"
+    mode: str = "vqa"                 # "vqa" or "vc"
+    threshold: float | None = None    # oracle threshold; None = the judge's default
+    prompt: str | None = None         # None = generated from the space / default caption prompt
+    repeats: int = 1
+    preset: str = "draft"
+    camera: str = "default"
+    cabin: str = "default"
+    channels: tuple[str, ...] = ()
+    sut_timeout_s: float = 60.0
+    factory: str = "isu_validate.pipeline:build_components"
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+@dataclass
+class Job:
+    test_id: str
+    generation: int
+    index: int
+    algorithm: str
+    seed: int
+    scene: dict
+    scene_key: str
+    f_div: float
+
+
+@dataclass
+class Components:
+    renderer: Any
+    sut: Any
+    judge: Any
+    build_request: Any               # (space, scene, image, mode, prompt) -> SUTRequest
+    extra: dict = field(default_factory=dict)
+
+
+def build_components(config: PipelineConfig, space: SceneSpace) -> Components:
+    """The real renderer (Blender), SUT adapter and judge."""
+    from .evaluate import make_judge
+    from .render import open_renderer
+    from .sut import build_request, open_sut
+
+    run_dir = Path(config.run_dir)
+    renderer = open_renderer(preset=config.preset, camera=config.camera, cabin=config.cabin,
+                             channels=config.channels, cache_dir=run_dir / "cache" / "render",
+                             log_dir=run_dir / "logs")
+    sut = open_sut(config.sut, space=space, repeats=config.repeats, cache_dir=run_dir / "cache" / "sut",
+                   timeout_s=config.sut_timeout_s)
+    judge = make_judge(config.mode, space, threshold=config.threshold)
+    return Components(renderer, sut, judge, build_request)
+
+
+def _load_factory(path: str):
+    module, _, name = path.partition(":")
+    if not module or not name:
+        raise ValueError(f"pipeline factory must be 'module:function', got {path!r}")
+    try:
+        return getattr(importlib.import_module(module), name)
+    except (ImportError, AttributeError) as exc:
+        raise ValueError(f"cannot load the pipeline factory {path!r}: {exc}") from None
+
+
+class Pipeline:
+    def __init__(self, config: PipelineConfig):
+        self.config = config
+        self.space = load_space(config.space)
+        self.run_dir = Path(config.run_dir)
+        for sub in ("images", "labels"):
+            (self.run_dir / sub).mkdir(parents=True, exist_ok=True)
+        self.parts: Components = _load_factory(config.factory)(config, self.space)
+
+    def evaluate(self, job: Job) -> TestRecord:
+        canonical = self.space.check(job.scene)
+        record = TestRecord(test_id=job.test_id, generation=job.generation, index=job.index,
+                            algorithm=job.algorithm, seed=job.seed, scene_key=job.scene_key,
+                            scene=job.scene, canonical=canonical, f_div=job.f_div)
+        self._write_label(job, canonical)
+        image = self._render(record)
+        if image is not None:
+            self._ask_and_judge(record, image)
+        record.created = time.time()
+        return record
+
+    def _write_label(self, job: Job, canonical: dict) -> None:
+        label = {"test_id": job.test_id, "space": self.space.name, "space_hash": self.space.hash,
+                 "scene_key": job.scene_key, "scene": canonical,
+                 "truth": {q.key: q.truth for q in self.space.questions(canonical)}}
+        (self.run_dir / "labels" / f"{job.test_id}.json").write_text(json.dumps(label, indent=2))
+
+    def _render(self, record: TestRecord) -> Path | None:
+        out = self.run_dir / "images" / f"{record.test_id}.png"
+        start = time.perf_counter()
+        try:
+            result = self.parts.renderer.render(record.canonical, out)
+        except RenderError as exc:
+            record.render_error = str(exc) or type(exc).__name__
+            record.timings["render_s"] = time.perf_counter() - start
+            return None
+        record.timings.update({k: float(v) for k, v in result.timings.items()})
+        record.timings["render_s"] = time.perf_counter() - start
+        record.details["render_cached"] = bool(result.cached)
+        record.details["channels"] = {k: _relative(v, self.run_dir) for k, v in result.channels.items()}
+        record.image = _relative(result.image, self.run_dir)
+        return Path(result.image)
+
+    def _ask_and_judge(self, record: TestRecord, image: Path) -> None:
+        request = self.parts.build_request(self.space, record.canonical, image, self.config.mode, self.config.prompt)
+        start = time.perf_counter()
+        try:
+            response = self.parts.sut.query(request)
+        except Exception as exc:  # an adapter bug must not kill the run: record it as a SUT error
+            response = SUTResponse(error=f"{type(exc).__name__}: {exc}", raw=traceback.format_exc(limit=3))
+        record.timings["sut_s"] = time.perf_counter() - start
+        record.sut_raw, record.answers, record.caption = response.raw, response.answers, response.caption
+        record.sut_error = response.error
+        record.details["problems"] = list(response.problems)
+        record.details["sut"] = dict(response.extra)
+        verdict = self.parts.judge.judge(record.canonical, request, response)
+        record.fitness, record.primary, record.failed = dict(verdict.fitness), verdict.primary, verdict.failed
+        record.details["verdict"] = verdict.details
+
+    def close(self) -> None:
+        close = getattr(self.parts.renderer, "close", None)
+        if close:
+            close()
+
+
+def _relative(path, root: Path) -> str:
+    path = Path(path)
+    try:
+        return str(path.resolve().relative_to(root.resolve()))
+    except ValueError:
+        return str(path)
+
+
+# One pipeline per process and configuration: worker processes and Dask workers reuse it.
+_PIPELINES: dict[str, Pipeline] = {}
+
+
+def evaluate_job(config: PipelineConfig, job: Job) -> TestRecord:
+    key = json.dumps(config.to_dict(), sort_keys=True)
+    if key not in _PIPELINES:
+        _PIPELINES[key] = Pipeline(config)
+    return _PIPELINES[key].evaluate(job)
+
+
+def close_pipelines() -> None:
+    while _PIPELINES:
+        _PIPELINES.popitem()[1].close()

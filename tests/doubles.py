@@ -1,0 +1,71 @@
+"""Test doubles for the pipeline: a renderer that paints the scene hash, a deterministic
+SUT that is wrong in known places, and a weighted exact-match judge.  Used through
+``--pipeline-factory tests.doubles:build`` so runs exercise the real search loop."""
+from __future__ import annotations
+
+import hashlib
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+
+from isu_validate.pipeline import Components
+from isu_validate.protocols import RenderResult, SUTRequest, SUTResponse, Verdict
+
+
+class PaintRenderer:
+    def __init__(self, space):
+        self.space = space
+        self.calls = 0
+
+    def render(self, scene, out: Path) -> RenderResult:
+        import cv2
+
+        self.calls += 1
+        digest = hashlib.sha1(self.space.key(scene).encode()).digest()
+        img = np.zeros((24, 32, 3), np.uint8) + np.frombuffer(digest[:3], np.uint8)
+        cv2.imwrite(str(out), img)
+        # tests slow the renderer down to kill a run mid-generation
+        time.sleep(float(os.environ.get("ISU_TEST_RENDER_DELAY", "0")))
+        return RenderResult(image=Path(out), timings={"update_s": 0.0, "render_s": 0.001})
+
+
+class BlindSUT:
+    """Answers from the label file, wrong about seat belts in low light and about luggage colour."""
+    id = "blind-double"
+
+    def __init__(self, space):
+        self.space = space
+
+    def query(self, request: SUTRequest) -> SUTResponse:
+        import json
+
+        label = json.loads((Path(request.image).parent.parent / "labels" / (Path(request.image).stem + ".json")).read_text())
+        scene = label["scene"]
+        answers = {q.key: q.truth for q in request.questions}
+        if scene.get("external_light") == "LOW" and "seat_belt" in answers:
+            answers["seat_belt"] = "NO" if answers["seat_belt"] == "YES" else "YES"
+        if "luggage_colour" in answers:
+            answers["luggage_colour"] = "YELLOW"
+        return SUTResponse(raw=repr(answers), answers=answers)
+
+
+class ExactMatchJudge:
+    def __init__(self, threshold):
+        self.threshold = 1.0 if threshold is None else threshold
+
+    def judge(self, scene, request, response) -> Verdict:
+        if response.error:
+            return Verdict({}, 1.0, False, {"sut_error": response.error})
+        total = sum(q.weight for q in request.questions) or 1.0
+        score = sum(q.weight for q in request.questions if (response.answers or {}).get(q.key) == q.truth) / total
+        return Verdict({"f_qa": score}, score, score < self.threshold)
+
+
+def build_request(space, scene, image, mode, prompt):
+    return SUTRequest(mode=mode, image=Path(image), prompt=prompt or "", questions=space.questions(scene))
+
+
+def build(config, space) -> Components:
+    return Components(PaintRenderer(space), BlindSUT(space), ExactMatchJudge(config.threshold), build_request)

@@ -1,0 +1,137 @@
+"""Scene space: loading, validation errors, activity, encoding, sampling, repair."""
+import textwrap
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from isu_validate.space import SpaceError, load_space, space_from_dict
+
+SPACE = load_space()
+
+
+def write(tmp_path, body: str):
+    path = tmp_path / "space.toml"
+    path.write_text(textwrap.dedent(body))
+    return path
+
+
+def test_default_space_has_the_papers_features():
+    expected = {"driver_gender", "driver_emotion", "phone_position", "driver_weight", "driver_height", "seat_belt",
+                "tshirt_colour", "child_seat", "child", "child_seat_orientation", "car_lights", "external_light",
+                "luggage", "luggage_orientation", "luggage_position", "luggage_colour", "phone", "cola_bottle", "can"}
+    assert set(SPACE.names) == expected
+    assert SPACE.features["phone_position"].values == ("NONE",) + tuple(f"P{i}" for i in range(1, 11))
+    assert SPACE.features["luggage_orientation"].low == 20 and SPACE.features["luggage_orientation"].high == 140
+    assert all(f.weight > 0 for f in SPACE.predicted)
+
+
+def test_inactive_features_are_dropped_from_canonical_form_questions_and_key():
+    scene = SPACE.sample(np.random.default_rng(0), 1)[0]
+    scene.update(luggage="NO", luggage_colour="YELLOW", child_seat="NO", child="YES")
+    other = dict(scene, luggage_colour="ANTHRACITE", luggage_orientation=33.0, child="NO")
+    canonical = SPACE.canonical(scene)
+    assert "luggage_colour" not in canonical and "child" not in canonical
+    assert "luggage_colour" not in {q.key for q in SPACE.questions(scene)}
+    assert SPACE.key(scene) == SPACE.key(other)
+    assert SPACE.key(scene) != SPACE.key(dict(scene, luggage="YES", luggage_position="BACK"))
+
+
+def test_truth_mapping_and_questions():
+    scene = SPACE.sample(np.random.default_rng(1), 1)[0]
+    scene.update(phone_position="P3", phone="YES")
+    truth = {q.key: q.truth for q in SPACE.questions(scene)}
+    assert truth["phone_position"] == "YES"
+    scene.update(phone_position="NONE")
+    assert {q.key: q.truth for q in SPACE.questions(scene)}["phone_position"] == "NO"
+
+
+def test_constraints_are_checked():
+    scene = SPACE.sample(np.random.default_rng(2), 1)[0]
+    scene.update(child_seat="YES", child="YES", child_seat_orientation="FRONT_FACING", luggage="YES",
+                 luggage_position="PASSENGER", luggage_colour="YELLOW", luggage_orientation=50.0)
+    assert any("same seat" in p for p in SPACE.violations(scene))
+    scene.update(luggage="NO")  # an absent suitcase is on no seat
+    assert SPACE.is_valid(scene)
+    scene.update(phone_position="P1", phone="NO")
+    with pytest.raises(SpaceError, match="requires a phone"):
+        SPACE.check(scene)
+
+
+def test_out_of_domain_and_unknown_features_are_named():
+    scene = SPACE.sample(np.random.default_rng(3), 1)[0]
+    problems = SPACE.violations(dict(scene, seat_belt="MAYBE", wings="YES"))
+    assert any("wings" in p for p in problems)
+    assert any("seat_belt" in p and "MAYBE" in p for p in problems)
+
+
+@pytest.mark.parametrize("body, message", [
+    ("[features.a]\ntype = 'tensor'\nvalues = [1]\n", "unknown type 'tensor'"),
+    ("[features.a]\ntype = 'categorical'\nvalues = []\n", "empty domain"),
+    ("[features.a]\ntype = 'continuous'\nlow = 2.0\nhigh = 1.0\n", "empty domain"),
+    ("[features.a]\ntype = 'categorical'\nvalues = ['X']\npredicted = true\nweight = -1\nquestion = 'q'\n",
+     "weight must be a number >= 0"),
+    ("[features.a]\ntype = 'categorical'\nvalues = ['X']\nactive_when = { ghost = 'Y' }\n", "unknown feature 'ghost'"),
+    ("[features.a]\ntype = 'categorical'\nvalues = ['X','Y']\n[[constraints]]\nname = 'c'\nif = { ghost = 'X' }\n"
+     "then = { a = 'X' }\n", "unknown feature 'ghost'"),
+    ("[features.a]\ntype = 'categorical'\nvalues = ['X','Y']\n[[constraints]]\nname = 'never X'\nif = { a = 'X' }\n"
+     "then = { a = 'Y' }\n[[constraints]]\nname = 'never Y'\nif = { a = 'Y' }\nthen = { a = 'X' }\n",
+     "contradict each other"),
+    ("[features.a]\ntype = 'categorical'\nvalues = ['X','Y']\n[[constraints]]\nname = 'typo'\nif = { a = 'Z' }\n"
+     "then = { a = 'X' }\n", "never takes"),
+    ("features = 3\n", r"no \[features\.\*\] tables"),
+    ("[features.a\n", "not valid TOML"),
+])
+def test_bad_space_files_fail_with_a_message_naming_file_feature_and_problem(tmp_path, body, message):
+    path = write(tmp_path, body)
+    with pytest.raises(SpaceError, match=message) as err:
+        load_space(path)
+    assert str(path) in str(err.value)
+
+
+def test_missing_space_file_is_named():
+    with pytest.raises(SpaceError, match="no spaces rig named 'nope'"):
+        load_space("nope")
+
+
+def test_zero_width_ranges_encode_without_dividing_by_zero():
+    space = space_from_dict({"features": {
+        "fixed": {"type": "continuous", "low": 5.0, "high": 5.0},
+        "one": {"type": "categorical", "values": ["ONLY"]},
+        "x": {"type": "continuous", "low": 0.0, "high": 10.0}}})
+    scene = {"fixed": 5.0, "one": "ONLY", "x": 2.5}
+    u = space.encode(scene)
+    assert np.all(np.isfinite(u)) and u.tolist() == [0.0, 0.0, 0.25]
+    assert space.decode(u) == scene
+    vectors = np.array([space.canonical_vector(s) for s in (scene, dict(scene, x=10.0))])
+    assert space.distances(vectors[0], vectors).tolist() == pytest.approx([0.0, 0.75 / 3])
+
+
+def test_distance_counts_features_active_in_only_one_scene():
+    base = SPACE.sample(np.random.default_rng(4), 1)[0]
+    base.update(luggage="NO", child_seat="NO")
+    with_luggage = dict(base, luggage="YES", luggage_position="BACK", luggage_colour="YELLOW", luggage_orientation=80.0)
+    a, b = SPACE.canonical_vector(base), SPACE.canonical_vector(with_luggage)
+    # luggage itself differs (1) and three luggage features are active in only one scene (3)
+    assert SPACE.distances(a, b[None])[0] == pytest.approx(4 / len(SPACE.names))
+    assert SPACE.distances(a, a[None])[0] == 0.0
+
+
+scenes = st.integers(0, 2**32 - 1).map(lambda seed: SPACE.sample(np.random.default_rng(seed), 1)[0])
+
+
+@settings(max_examples=60, deadline=None)
+@given(scenes)
+def test_encoding_round_trips(scene):
+    decoded = SPACE.decode(SPACE.encode(scene))
+    assert SPACE.key(decoded) == SPACE.key(scene)
+    assert np.all((SPACE.encode(scene) >= 0) & (SPACE.encode(scene) <= 1))
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.lists(st.floats(-0.5, 1.5), min_size=19, max_size=19))
+def test_repair_turns_any_vector_into_a_valid_scene(seed, u):
+    raw = {n: f.decode(x) for (n, f), x in zip(SPACE.features.items(), u)}
+    raw["phone_position"], raw["phone"] = "P4", "NO"  # break a constraint on purpose
+    repaired = SPACE.repair(raw, np.random.default_rng(seed))
+    assert SPACE.violations(repaired) == []
