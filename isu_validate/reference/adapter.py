@@ -1,0 +1,44 @@
+"""``--sut reference``: the reference ISU behind the same adapter seam as every SUT."""
+from __future__ import annotations
+
+import hashlib
+import json
+import time
+from pathlib import Path
+from typing import Any
+
+from ..protocols import SUTRequest
+from ..sut.adapters.common import fingerprint, take_options
+from ..sut.errors import SUTConfigError
+from ..sut.exchange import Exchange
+from .model import ReferenceISU, default_model_dir
+
+OPTIONS = {"model_dir": None}
+
+
+class ReferenceAdapter:
+    def __init__(self, target: str = "", *, timeout_s: float = 60.0, space=None, **options: Any):
+        opts = take_options(options, OPTIONS, "SUT reference")
+        model_dir = Path(opts["model_dir"] or default_model_dir())
+        try:
+            self.model = ReferenceISU(space, model_dir)
+        except (FileNotFoundError, ValueError) as exc:
+            raise SUTConfigError(f"SUT reference: {exc}") from None
+        self.id = "reference"
+        heads = hashlib.sha1((model_dir / "heads.npz").read_bytes()).hexdigest()[:12]
+        self.fingerprint = fingerprint("reference", self.id, {"heads": heads})
+
+    def send(self, request: SUTRequest) -> Exchange:
+        start = time.perf_counter()
+        try:
+            if request.mode == "vqa":
+                content = {"answers": self.model.answer(Path(request.image), [q.key for q in request.questions])}
+            else:
+                content = {"caption": self.model.caption(Path(request.image))}
+        except (OSError, ValueError) as exc:
+            return Exchange(error=f"reference ISU could not read the image: {exc}", latency_s=time.perf_counter() - start)
+        return Exchange(raw=json.dumps(content), content=content, latency_s=time.perf_counter() - start)
+
+
+def open_reference(target: str, **kwargs: Any) -> ReferenceAdapter:
+    return ReferenceAdapter(target, **kwargs)

@@ -1,0 +1,56 @@
+"""The reference ISU: backbone features -> one head per feature -> answers and captions."""
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+import numpy as np
+
+from ..paths import data_dir
+from ..space import SceneSpace
+from .backbone import Backbone, read_rgb
+from .captioner import describe
+from .heads import load_heads
+
+
+def default_model_dir() -> Path:
+    return data_dir() / "reference-isu"
+
+
+class ReferenceISU:
+    def __init__(self, space: SceneSpace, model_dir: Path | None = None, backbone: Backbone | None = None):
+        self.space = space
+        self.model_dir = Path(model_dir or default_model_dir())
+        heads, self.meta = load_heads(self.model_dir)
+        self.heads = {h.feature: h for h in heads}
+        unknown = set(self.heads) - set(space.names)
+        if unknown:
+            raise ValueError(f"the reference ISU in {self.model_dir} was trained for features {sorted(unknown)} "
+                             f"that space {space.name!r} does not have; retrain it for this space")
+        size = self.meta.get("input_size", [320, 240])
+        self.backbone = backbone or Backbone(*size)
+
+    def predict(self, image: Path) -> dict[str, str]:
+        """An answer for every feature it has a head for; NONE where its own answers say the
+        thing is absent (no luggage seen -> no luggage colour)."""
+        features = self.backbone.features([read_rgb(image)])
+        raw = {name: head.predict(features)[0] for name, head in self.heads.items()}
+        return {name: (answer if self._active(name, raw) else "NONE") for name, answer in raw.items()}
+
+    def _active(self, name: str, answers: dict[str, str]) -> bool:
+        condition = self.space.features[name].active_when
+        if condition is None:
+            return True
+        seen = {n: answers.get(n, "NONE") for n in condition.features if n in self.heads}
+        if len(seen) < len(condition.features):
+            return True  # depends on something it cannot see: answer anyway
+        return condition.matches(seen)
+
+    def answer(self, image: Path, keys: list[str]) -> dict[str, str]:
+        predictions = self.predict(image)
+        return {k: predictions[k] for k in keys if k in predictions}
+
+    def caption(self, image: Path) -> str:
+        predictions = self.predict(image)
+        variant = int(hashlib.sha1(Path(image).read_bytes()).hexdigest(), 16)
+        return describe(predictions, variant)

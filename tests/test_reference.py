@@ -1,0 +1,125 @@
+"""The reference ISU's learning machinery on images a painter makes (no Blender here):
+balanced sampling, heads, NONE for absent things, captions, the SUT adapter, the card."""
+import json
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from isu_validate.protocols import SUTRequest
+from isu_validate.reference.backbone import Backbone
+from isu_validate.reference.captioner import describe
+from isu_validate.reference.heads import fit_head, load_heads, save_heads
+from isu_validate.reference.training import balanced_scenes, train_reference
+from isu_validate.space import load_space
+
+SPACE = load_space()
+
+
+class PatchPainter:
+    """Stands in for the renderer: big coloured patches for a few features."""
+
+    def render(self, scene, out: Path):
+        img = np.full((120, 160, 3), 90, np.uint8)
+        cv2.rectangle(img, (10, 60), (60, 110), (255, 255, 255) if scene["tshirt_colour"] == "WHITE" else (0, 0, 0), -1)
+        if scene["luggage"] == "YES":
+            colour = (0, 220, 255) if scene["luggage_colour"] == "YELLOW" else (50, 50, 50)
+            x = 90 if scene["luggage_position"] == "PASSENGER" else 40
+            cv2.rectangle(img, (x, 5), (x + 60, 45), colour, -1)
+        cv2.imwrite(str(out), img)
+
+
+@pytest.fixture(scope="module")
+def backbone():
+    return Backbone(160, 120, threads=2)
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory, backbone):
+    folder = tmp_path_factory.mktemp("ref")
+    card = train_reference(SPACE, PatchPainter(), folder / "model", folder / "work", n_train=48, n_test=24,
+                           seed=3, preset="painted", backbone=backbone)
+    return folder, card
+
+
+def test_balanced_scenes_are_valid_and_balanced():
+    scenes = balanced_scenes(SPACE, 400, np.random.default_rng(0))
+    assert all(SPACE.is_valid(s) for s in scenes)
+    in_hand = np.mean([s["phone_position"] != "NONE" for s in scenes])
+    assert 0.4 < in_hand < 0.6  # uniform values would give 10/11
+
+
+def test_heads_learn_what_is_visible_and_the_card_says_how_well(trained):
+    folder, card = trained
+    acc = card["held_out"]["per_feature"]
+    assert acc["tshirt_colour"]["accuracy"] >= 0.9
+    assert acc["luggage"]["accuracy"] >= 0.85
+    assert set(card["held_out"]["by_external_light"]) <= {"LOW", "MEDIUM", "HIGH"}
+    text = (folder / "model" / "MODEL_CARD.md").read_text()
+    assert "tshirt_colour" in text and "reference train --n 48" in text
+    assert (folder / "model" / "heads.npz").stat().st_size < 5_000_000
+
+
+def test_rendered_sets_resume_without_rendering_again(trained, backbone):
+    folder, _ = trained
+
+    class NoRenderer:
+        def render(self, scene, out):
+            raise AssertionError("re-rendered an image that was already there")
+
+    train_reference(SPACE, NoRenderer(), folder / "model2", folder / "work", n_train=48, n_test=24, seed=3,
+                    preset="painted", backbone=backbone)
+
+
+def test_adapter_answers_only_what_is_asked_and_none_for_absent_things(trained, backbone, monkeypatch):
+    from isu_validate.reference import model as model_module
+    from isu_validate.reference.adapter import ReferenceAdapter
+
+    folder, _ = trained
+    monkeypatch.setattr(model_module, "Backbone", lambda *a: backbone)
+    adapter = ReferenceAdapter(space=SPACE, model_dir=str(folder / "model"))
+    scene = SPACE.sample(np.random.default_rng(5), 1)[0]
+    scene.update(luggage="NO", tshirt_colour="WHITE")
+    image = folder / "probe.png"
+    PatchPainter().render(scene, image)
+    questions = SPACE.questions(scene)
+    reply = adapter.send(SUTRequest("vqa", image, "", questions + [q for q in SPACE.questions(
+        dict(scene, luggage="YES", luggage_position="BACK", luggage_colour="YELLOW", luggage_orientation=30.0))
+        if q.key == "luggage_colour"]))
+    answers = reply.content["answers"]
+    assert answers["tshirt_colour"] == "WHITE" and answers["luggage"] == "NO"
+    assert answers["luggage_colour"] == "NONE"  # it sees no luggage, so it names no colour
+    assert json.loads(reply.raw) == reply.content
+    caption = adapter.send(SUTRequest("vc", image, "")).content["caption"]
+    assert "white T-shirt" in caption and "suitcase" not in caption
+
+
+def test_missing_model_is_a_clear_error(tmp_path):
+    from isu_validate.reference.adapter import ReferenceAdapter
+    from isu_validate.sut.errors import SUTConfigError
+
+    with pytest.raises(SUTConfigError, match="reference train"):
+        ReferenceAdapter(space=SPACE, model_dir=str(tmp_path))
+
+
+def test_heads_round_trip_and_single_class_heads(tmp_path):
+    rng = np.random.default_rng(0)
+    X = rng.normal(size=(200, 5))
+    y = ["A" if v > 0 else "B" for v in X[:, 0]]
+    heads = [fit_head("f", X, y), fit_head("g", X, ["ONLY"] * 200)]
+    save_heads(heads, tmp_path, {"note": 1})
+    loaded, meta = load_heads(tmp_path)
+    assert meta["note"] == 1
+    assert loaded[0].predict(X) == heads[0].predict(X)
+    assert np.mean(np.array(loaded[0].predict(X)) == np.array(y)) > 0.9
+    assert loaded[1].predict(X[:3]) == ["ONLY"] * 3
+
+
+def test_captions_vary_in_wording_but_not_in_content():
+    p = {"driver_gender": "FEMALE", "driver_emotion": "HAPPY", "tshirt_colour": "BLACK", "seat_belt": "NO",
+         "phone_position": "YES", "child_seat": "YES", "child_seat_orientation": "REAR_FACING", "child": "YES",
+         "luggage": "NO", "phone": "YES", "cola_bottle": "NO", "can": "YES"}
+    captions = {describe(p, v) for v in range(40)}
+    assert len(captions) > 3
+    assert all("rear-facing child seat" in c and "black T-shirt" in c and "drink can" in c for c in captions)
