@@ -12,7 +12,7 @@ class Progress:
         self.live = hasattr(self.stream, "isatty") and self.stream.isatty()
         self.start = time.monotonic()
         self.done = self.failures = self.errors = self.resumed = 0
-        self._last_log = 0.0
+        self._last_log = float("-inf")  # the first update always shows
         self.log_every_s = log_every_s
 
     def update(self, failed: bool = False, errored: bool = False, resumed: bool = False) -> None:
