@@ -34,6 +34,7 @@ class PipelineConfig:
     cabin: str = "default"
     channels: tuple[str, ...] = ()
     sut_timeout_s: float = 60.0
+    sut_options: dict = field(default_factory=dict)  # adapter options (never secrets: keys come from env)
     factory: str = "isu_validate.pipeline:build_components"
 
     def to_dict(self) -> dict:
@@ -72,7 +73,7 @@ def build_components(config: PipelineConfig, space: SceneSpace) -> Components:
                              channels=config.channels, cache_dir=run_dir / "cache" / "render",
                              log_dir=run_dir / "logs")
     sut = open_sut(config.sut, space=space, repeats=config.repeats, cache_dir=run_dir / "cache" / "sut",
-                   timeout_s=config.sut_timeout_s)
+                   timeout_s=config.sut_timeout_s, **config.sut_options)
     judge = make_judge(config.mode, space, threshold=config.threshold)
     return Components(renderer, sut, judge, build_request)
 
@@ -135,6 +136,8 @@ class Pipeline:
         start = time.perf_counter()
         try:
             response = self.parts.sut.query(request)
+        except ValueError:  # a configuration problem (e.g. a rejected API key) stops the run
+            raise
         except Exception as exc:  # an adapter bug must not kill the run: record it as a SUT error
             response = SUTResponse(error=f"{type(exc).__name__}: {exc}", raw=traceback.format_exc(limit=3))
         record.timings["sut_s"] = time.perf_counter() - start

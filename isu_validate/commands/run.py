@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from ..pipeline import PipelineConfig
+from .sut import parse_options
 from ..search import ALGORITHMS, RunConfig, RunError, run_search
 
 DEFAULT_BUDGET = 40
@@ -43,6 +44,8 @@ def add_run_options(p) -> None:
     p.add_argument("--cabin", default="default", help="cabin rig: shipped name or TOML path")
     p.add_argument("--channels", default="", help="extra render channels, e.g. seg,depth")
     p.add_argument("--sut-timeout", type=float, default=60.0, help="seconds per SUT request")
+    p.add_argument("--sut-option", action="append", default=[], metavar="NAME=VALUE",
+                   help="adapter option, repeatable (see `isu-validate sut check --help`)")
     p.add_argument("--workers", type=int, default=1, help="parallel evaluation processes")
     p.add_argument("--cluster", help="Dask scheduler address (instead of local workers)")
     p.add_argument("--no-report", action="store_true", help="do not write report.html at the end")
@@ -69,6 +72,7 @@ def config_from_args(args) -> RunConfig:
         run_dir=str(args.out), space=args.space, sut=args.sut, mode=args.mode, threshold=args.threshold,
         prompt=args.prompt, repeats=args.repeats, preset=args.preset, camera=args.camera, cabin=args.cabin,
         channels=tuple(c for c in args.channels.split(",") if c), sut_timeout_s=args.sut_timeout,
+        sut_options=parse_options(args.sut_option),
         factory=args.pipeline_factory)
     return RunConfig(pipeline=pipeline, algorithm=args.algorithm, pop_size=args.pop_size, seed=args.seed,
                      budget_tests=budget_tests, budget_s=args.budget_time, workers=args.workers,

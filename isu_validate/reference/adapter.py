@@ -38,7 +38,3 @@ class ReferenceAdapter:
         except (OSError, ValueError) as exc:
             return Exchange(error=f"reference ISU could not read the image: {exc}", latency_s=time.perf_counter() - start)
         return Exchange(raw=json.dumps(content), content=content, latency_s=time.perf_counter() - start)
-
-
-def open_reference(target: str, **kwargs: Any) -> ReferenceAdapter:
-    return ReferenceAdapter(target, **kwargs)

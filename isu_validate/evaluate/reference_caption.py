@@ -1,0 +1,123 @@
+"""The reference caption of a scene, built from its active features.
+
+Templates live in ``data/captions/<space name>.toml`` (format described in
+``data/captions/isu-paper.toml``).  A space without a template file falls back to
+its features' ``caption`` fragments: "The scene shows a male driver, who looks happy, ...".
+Inactive features never reach the caption.
+"""
+from __future__ import annotations
+
+import re
+import tomllib
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+from typing import Any, Mapping
+
+from ..paths import data_dir
+from ..space import SceneSpace, SpaceError
+from ..space.conditions import Condition, parse_condition
+
+_SLOT = re.compile(r"\{([A-Za-z_][A-Za-z0-9_]*)\}")
+
+
+@dataclass(frozen=True)
+class Sentence:
+    text: str
+    when: Condition | None
+    slots: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class CaptionTemplate:
+    sentences: tuple[Sentence, ...]
+    phrases: Mapping[str, Mapping[str, str]]
+
+    def fill(self, space: SceneSpace, scene: Mapping[str, Any]) -> str:
+        canonical = space.canonical(scene)
+        out = []
+        for sentence in self.sentences:
+            if any(name not in canonical for name in sentence.slots):
+                continue
+            if sentence.when is not None and not sentence.when.matches(canonical):
+                continue
+            out.append(_SLOT.sub(lambda m: self.phrase(m.group(1), canonical[m.group(1)]), sentence.text))
+        return tidy(" ".join(out))
+
+    def phrase(self, feature: str, value: Any) -> str:
+        table = self.phrases.get(feature, {})
+        key = str(value)
+        if key in table:
+            return table[key]
+        if "*" in table:
+            return table["*"]
+        return key.lower().replace("_", "-") if isinstance(value, str) else f"{value:g}" if isinstance(value, float) else key
+
+
+def tidy(text: str) -> str:
+    """Collapse the gaps an empty phrase leaves ("car  ." -> "car.")."""
+    text = re.sub(r"\s+", " ", text)
+    text = re.sub(r"\b([Aa]) (?=[aeiouAEIOU])", r"\1n ", text)  # "a anthracite suitcase" -> "an ..."
+    return re.sub(r"\s+([.,;:!?])", r"\1", text).strip()
+
+
+def parse_template(raw: Mapping[str, Any], space: SceneSpace, where: str) -> CaptionTemplate:
+    sentences = []
+    for i, spec in enumerate(raw.get("sentences", [])):
+        here = f"{where}: sentence {i + 1}"
+        if not isinstance(spec, Mapping) or not isinstance(spec.get("text"), str):
+            raise SpaceError(f"{here}: needs a `text` string")
+        slots = tuple(_SLOT.findall(spec["text"]))
+        when = parse_condition(spec["when"], f"{here} when") if "when" in spec else None
+        for name in slots + (when.features if when else ()):
+            if name not in space.features:
+                raise SpaceError(f"{here}: names unknown feature {name!r} of space {space.name!r}")
+        sentences.append(Sentence(spec["text"], when, slots))
+    if not sentences:
+        raise SpaceError(f"{where}: no [[sentences]]; a caption template needs at least one")
+    phrases = raw.get("phrases", {})
+    for name, table in phrases.items():
+        if name not in space.features or not isinstance(table, Mapping):
+            raise SpaceError(f"{where}: [phrases.{name}] must be a table for a feature of space {space.name!r}")
+    return CaptionTemplate(tuple(sentences), {k: {str(a): str(b) for a, b in v.items()} for k, v in phrases.items()})
+
+
+def fragments_template(space: SceneSpace) -> CaptionTemplate:
+    """Fallback: one clause per feature with a ``caption`` fragment (YES/NO features only when YES)."""
+    sentences = []
+    for name, feature in space.features.items():
+        if not feature.caption:
+            continue
+        fragment = feature.caption.replace("{value}", "{" + name + "}")
+        when = None
+        if set(feature.values) == {"YES", "NO"}:
+            when = parse_condition({name: "YES"}, name)
+        elif "{" + name + "}" not in fragment:
+            continue  # a fixed phrase for a many-valued feature would say nothing about its value
+        sentences.append(Sentence(fragment + ",", when, (name,)))
+    if not sentences:
+        raise SpaceError(f"space {space.name!r} has no caption template (data/captions/{space.name}.toml) "
+                         "and no feature has a `caption` fragment; write one of them")
+    head = Sentence("The scene shows", None, ())
+    return CaptionTemplate((head, *sentences), {})
+
+
+@lru_cache(maxsize=16)
+def _template_for(space_id: int, space: SceneSpace, folder: str) -> CaptionTemplate:
+    path = Path(folder) / f"{space.name}.toml"
+    if not path.is_file():
+        return fragments_template(space)
+    try:
+        raw = tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise SpaceError(f"{path}: not valid TOML: {exc}") from None
+    return parse_template(raw, space, str(path))
+
+
+def template_for(space: SceneSpace, folder: str | Path | None = None) -> CaptionTemplate:
+    return _template_for(id(space), space, str(folder or data_dir() / "captions"))
+
+
+def reference_caption(space: SceneSpace, scene: Mapping[str, Any], folder: str | Path | None = None) -> str:
+    text = template_for(space, folder).fill(space, scene)
+    return re.sub(r",\s*$", ".", text) if not text.endswith(".") else text

@@ -1,0 +1,63 @@
+"""VQA fitness: weighted exact match over the scene's active predicted features.
+
+F_qa = sum of the weights of correctly answered questions / sum of the weights of all
+asked questions, so all-correct is 1.0 whatever the weights add up to (the public
+ISU-Test code's weights sum to 1.5 against a 1.0 threshold; ours mean what they say).
+Only the scene's active predicted features are scored: an answer about an inactive
+feature (luggage colour with no luggage) is ignored, never rewarded or punished.
+Each feature is ``correct``, ``wrong``, ``missing`` (not answered) or ``invalid`` (not
+one of its options); the last two count as not correct.
+"""
+from __future__ import annotations
+
+from typing import Any, Mapping
+
+from ..protocols import SUTRequest, SUTResponse, Verdict
+from ..space import SceneSpace
+from .oracles import DEFAULT_THRESHOLD, vqa_failed
+
+CORRECT, WRONG, MISSING, INVALID = "correct", "wrong", "missing", "invalid"
+
+
+class VQAJudge:
+    mode = "vqa"
+
+    def __init__(self, space: SceneSpace, threshold: float | None = None):
+        self.space = space
+        self.threshold = DEFAULT_THRESHOLD["vqa"] if threshold is None else float(threshold)
+
+    def judge(self, scene: Mapping[str, Any], request: SUTRequest, response: SUTResponse) -> Verdict:
+        if response.error:
+            # Not a failure-inducing scene: no fitness is measured, and the search is not drawn to it.
+            return Verdict({}, 1.0, False, {"sut_error": response.error, "threshold": self.threshold})
+        questions = self.space.questions(scene)  # the truth comes from the scene, never from the request
+        answers = response.answers or {}
+        parse_status = response.extra.get("status", {}) if isinstance(response.extra, dict) else {}
+        features, weights = {}, {}
+        for q in questions:
+            given = answers.get(q.key)
+            if given is None:
+                status = INVALID if parse_status.get(q.key) == INVALID else MISSING
+            elif given not in q.options:
+                status = INVALID
+            else:
+                status = CORRECT if given == q.truth else WRONG
+            features[q.key] = {"status": status, "answer": given, "truth": q.truth, "weight": q.weight}
+            weights[q.key] = q.weight
+        f_qa, weighting = _weighted_score(features, weights)
+        counts = {s: sum(f["status"] == s for f in features.values()) for s in (CORRECT, WRONG, MISSING, INVALID)}
+        details = {"features": features, "counts": counts, "threshold": self.threshold, "weighting": weighting,
+                   "ignored": sorted(set(answers) - set(features))}
+        return Verdict({"f_qa": f_qa}, f_qa, vqa_failed(f_qa, self.threshold), details)
+
+
+def _weighted_score(features: dict, weights: dict) -> tuple[float, str]:
+    if not features:
+        return 1.0, "no questions asked (no active predicted feature): nothing to get wrong"
+    total = sum(weights.values())
+    if total > 0:
+        right = sum(weights[k] for k, f in features.items() if f["status"] == CORRECT)
+        return right / total, "weights normalised by their active sum"
+    # Every active weight is zero: the weights carry no preference, so count questions equally.
+    right = sum(f["status"] == CORRECT for f in features.values())
+    return right / len(features), "all active weights are 0: unweighted share of correct answers"

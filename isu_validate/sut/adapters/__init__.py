@@ -1,0 +1,1 @@
+"""One module per kind of SUT; ``isu_validate.sut.registry`` maps spec schemes to them."""
