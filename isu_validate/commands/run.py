@@ -89,18 +89,14 @@ def cmd_run(args) -> int:
     print(f"{summary.tests} tests ({summary.evaluated_now} evaluated now), {summary.failures} failing, "
           f"{summary.errors} with SUT/render errors; {summary.stopped_because}")
     if not args.no_report:
-        report = write_report(summary.run_dir)
-        if report:
-            print(f"report: {report}")
+        print(f"report: {write_report(summary.run_dir)}")
     print(f"run directory: {summary.run_dir}")
     return 0
 
 
-def write_report(run_dir: Path) -> Path | None:
-    try:
-        from ..analysis import write_run_report
-    except ImportError:
-        return None
+def write_report(run_dir: Path) -> Path:
+    from ..analysis import write_run_report
+
     return write_run_report(run_dir)
 
 

@@ -1,0 +1,64 @@
+"""RQ2: how diverse are the failures?  Failing tests' embeddings are clustered with
+k-means; per algorithm, coverage is the share of clusters holding at least one of its
+failures and entropy the normalised Shannon entropy of its failures over all k clusters
+(Biagiola and Tonella): 1 when spread evenly, 0 when all fall in one cluster."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from sklearn.cluster import KMeans
+
+
+@dataclass(frozen=True)
+class Clustering:
+    labels: np.ndarray   # cluster of each embedded failure
+    k_requested: int
+    k: int               # clusters used: at most the number of distinct embeddings
+    note: str = ""
+
+
+def cluster_failures(embeddings: np.ndarray, k: int, seed: int = 0) -> Clustering:
+    """k-means on L2-normalised embeddings (cosine geometry), k capped by the distinct points."""
+    if k < 1:
+        raise ValueError(f"the number of clusters must be at least 1, got {k}")
+    n = len(embeddings)
+    if n == 0:
+        return Clustering(np.zeros(0, dtype=int), k, 0, "no failures to cluster")
+    unit = _normalise(np.asarray(embeddings, dtype=float))
+    distinct = len(np.unique(np.round(unit, 9), axis=0))
+    used = min(k, distinct)
+    note = f"k lowered from {k} to {used}: only {distinct} distinct failing embeddings" if used < k else ""
+    if used == 1:
+        return Clustering(np.zeros(n, dtype=int), k, 1, note)
+    model = KMeans(n_clusters=used, n_init=10, random_state=seed).fit(unit)
+    return Clustering(model.labels_.astype(int), k, used, note)
+
+
+def _normalise(x: np.ndarray) -> np.ndarray:
+    norms = np.linalg.norm(x, axis=1, keepdims=True)
+    return x / np.where(norms > 0, norms, 1.0)
+
+
+def cluster_counts(labels, k: int) -> np.ndarray:
+    """How many of the given failures fall in each of the k clusters (empty ones count 0)."""
+    return np.bincount(np.asarray(labels, dtype=int), minlength=k)[:k] if k else np.zeros(0, dtype=int)
+
+
+def coverage(labels, k: int) -> float:
+    """Share of the k clusters that hold at least one of these failures (0 without failures)."""
+    return float((cluster_counts(labels, k) > 0).sum() / k) if k else 0.0
+
+
+def normalised_entropy(labels, k: int) -> float:
+    """Shannon entropy of the failures over k clusters divided by log k.
+    NaN without failures (undefined); 0 with a single cluster (no spread is possible)."""
+    counts = cluster_counts(labels, k)
+    total = counts.sum()
+    if total == 0:
+        return math.nan
+    if k == 1:
+        return 0.0
+    p = counts[counts > 0] / total
+    return float(-(p * np.log(p)).sum() / math.log(k))

@@ -1,0 +1,38 @@
+"""``isu-validate report RUN... --out DIR``: RQ1 and RQ2 over runs, with statistics."""
+from __future__ import annotations
+
+from pathlib import Path
+
+
+def register(sub) -> None:
+    p = sub.add_parser("report", help="compare runs: failure rates, statistics, failure analysis and diversity",
+                       description="Compare runs grouped by SUT, mode and algorithm: RQ1 failure rates at thresholds "
+                                   "with the Wilcoxon rank-sum test and A12, failures over time, failure analysis "
+                                   "and regions, RQ2 failure clusters (coverage, entropy), and a failure gallery. "
+                                   "Writes report.html plus CSV/JSON for every table.")
+    p.add_argument("runs", nargs="+", type=Path, metavar="RUN",
+                   help="run directories (a folder of run directories stands for all of them)")
+    p.add_argument("--out", type=Path, required=True, help="folder for report.html and the tables")
+    p.add_argument("--embedding", default="inception",
+                   help="image embedding for failure clusters: inception (FID InceptionV3, default), "
+                        "clip:PATH (TorchScript CLIP image encoder you supply), or scene (scene encoding, no images)")
+    p.add_argument("--clusters", type=int, default=None, metavar="K",
+                   help="k for k-means (default 10; lowered when there are fewer distinct failures)")
+    p.add_argument("--gallery", type=int, default=None, metavar="N", help="failing scenes shown (default 60)")
+    p.add_argument("--seed", type=int, default=0, help="seed for k-means")
+    p.set_defaults(func=cmd_report)
+
+
+def cmd_report(args) -> int:
+    from ..analysis.multi_report import DEFAULT_GALLERY, DEFAULT_K, ReportSettings, build_report
+
+    k = DEFAULT_K if args.clusters is None else args.clusters
+    gallery = DEFAULT_GALLERY if args.gallery is None else args.gallery
+    if k < 1:
+        raise ValueError(f"--clusters must be at least 1, got {k}")
+    if gallery < 0:
+        raise ValueError(f"--gallery must be 0 or more, got {gallery}")
+    settings = ReportSettings(embedding=args.embedding, k=k, seed=args.seed, gallery=gallery)
+    path = build_report(args.runs, args.out, settings)
+    print(f"report: {path}")
+    return 0
