@@ -6,8 +6,10 @@ import time
 
 
 class Progress:
-    def __init__(self, total: int | None, label: str = "tests", stream=None, log_every_s: float = 10.0):
+    def __init__(self, total: int | None, label: str = "tests", stream=None, log_every_s: float = 10.0,
+                 verdicts: bool = True):
         self.total, self.label = total, label
+        self.verdicts = verdicts  # show failure and error counts (tests), or just the count (e.g. renders)
         self.stream = stream or sys.stderr
         self.live = hasattr(self.stream, "isatty") and self.stream.isatty()
         self.start = time.monotonic()
@@ -29,8 +31,10 @@ class Progress:
         elapsed = time.monotonic() - self.start
         fresh = self.done - self.resumed
         rate = fresh / elapsed if elapsed > 0 and fresh else 0.0
-        parts = [f"{self.label} {self.done}" + (f"/{self.total}" if self.total else ""),
-                 f"failures {self.failures}", f"SUT/render errors {self.errors}", f"{rate:.2f}/s"]
+        parts = [f"{self.label} {self.done}" + (f"/{self.total}" if self.total else "")]
+        if self.verdicts:
+            parts += [f"failures {self.failures}", f"SUT/render errors {self.errors}"]
+        parts.append(f"{rate:.2f}/s")
         if self.resumed:
             parts.append(f"resumed {self.resumed}")
         if self.total and rate > 0:

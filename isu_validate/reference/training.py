@@ -46,7 +46,7 @@ def balanced_scenes(space: SceneSpace, n: int, rng: np.random.Generator) -> list
 def render_examples(space: SceneSpace, scenes: list[dict], renderer, folder: Path, label: str) -> list[Example]:
     """Render each scene once into ``folder``; images already there (same scene) are kept."""
     folder.mkdir(parents=True, exist_ok=True)
-    progress = Progress(len(scenes), label=f"rendering {label}")
+    progress = Progress(len(scenes), label=f"rendering {label}", verdicts=False)
     examples = []
     for i, scene in enumerate(scenes):
         canonical = space.canonical(scene)

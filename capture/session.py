@@ -1,0 +1,84 @@
+"""Shooting a session: frames as PNG with a JSON sidecar each, plus ``session.json``.
+
+Every frame is on disk (written atomically) before the next is requested, so a camera
+that is unplugged mid-session leaves every frame taken so far, and ``session.json``
+says what happened.  A session folder replays as ``--source replay:DIR``.
+"""
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import cv2
+
+from .sources import CaptureError, ExposureRequest, FrameSource
+
+
+@dataclass
+class Session:
+    out: Path
+    frames: list[Path] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+    error: str | None = None
+
+
+def _atomic_write_text(path: Path, text: str) -> None:
+    tmp = path.with_name(f".{path.name}.tmp")
+    tmp.write_text(text)
+    os.replace(tmp, path)
+
+
+def _atomic_write_png(path: Path, image) -> None:
+    tmp = path.with_name(f".{path.stem}.tmp.png")
+    if not cv2.imwrite(str(tmp), image):
+        raise OSError(f"could not write {path} (disk full or read-only?)")
+    os.replace(tmp, path)
+
+
+def shoot(source: FrameSource, n_frames: int, out: str | Path, request: ExposureRequest = ExposureRequest(),
+          progress=None) -> Session:
+    """Take ``n_frames`` frames into ``out``; raises CaptureError (frames kept) when the camera fails."""
+    if n_frames <= 0:
+        raise ValueError(f"--frames must be positive, got {n_frames}")
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    if any(out.glob("frame_*.png")):
+        raise ValueError(f"{out} already holds frames from another session; choose a new --out folder")
+    session = Session(out)
+    record = {"source": source.spec, "requested": {"frames": n_frames, "exposure_us": request.exposure_us,
+                                                   "iso": request.iso, "auto_exposure": request.auto},
+              "started": _dt.datetime.now(_dt.timezone.utc).isoformat(), "status": "running", "frames": [],
+              "warnings": session.warnings}
+
+    def save(status: str) -> None:
+        record["status"] = status
+        record["frames"] = [p.name for p in session.frames]
+        record["error"] = session.error
+        _atomic_write_text(out / "session.json", json.dumps(record, indent=2))
+
+    save("running")
+    try:
+        with source:
+            session.warnings += source.set_exposure(request)
+            for i in range(n_frames):
+                frame = source.read()
+                path = out / f"frame_{i:04d}.png"
+                _atomic_write_png(path, frame.image)
+                meta = dict(frame.meta, frame=path.name, requested=record["requested"])
+                _atomic_write_text(path.with_suffix(".json"), json.dumps(meta, indent=2, default=str))
+                session.frames.append(path)
+                for w in meta.get("warnings", []):
+                    if w not in session.warnings:
+                        session.warnings.append(w)
+                if progress:
+                    progress(i + 1, n_frames, meta)
+    except CaptureError as exc:
+        session.error = str(exc)
+        save("failed")
+        kept = f"; the {len(session.frames)} frame(s) taken before are kept in {out}" if session.frames else ""
+        raise type(exc)(f"{exc}{kept}") from None
+    save("complete")
+    return session

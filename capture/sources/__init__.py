@@ -1,0 +1,43 @@
+"""Frame sources: one interface (``FrameSource``), three kinds of camera (V4L2, DepthAI, replay).
+
+``open_source(spec)`` turns a ``--source`` spec into a source:
+
+- ``v4l2:/dev/video0`` or ``v4l2:0``, optionally ``@1280x720``
+- ``depthai`` (the first OAK device) or ``depthai:MXID``, optionally ``@1920x1080``
+- ``replay:DIR`` (a session recorded by ``capture shoot``) or ``replay:VIDEO.mp4``
+"""
+from __future__ import annotations
+
+import re
+
+from .base import (CaptureError, DeviceBusy, DeviceDisconnected, DeviceNotFound, ExposureRequest, Frame,
+                   FrameSource, PermissionDenied)
+
+__all__ = ["CaptureError", "DeviceBusy", "DeviceDisconnected", "DeviceNotFound", "ExposureRequest", "Frame",
+           "FrameSource", "PermissionDenied", "open_source", "parse_spec"]
+
+SPEC_HELP = "v4l2:/dev/videoN[@WxH], depthai[:MXID][@WxH] or replay:DIR|VIDEO"
+
+
+def parse_spec(spec: str) -> tuple[str, str, tuple[int, int] | None]:
+    """(kind, target, size) of a source spec."""
+    m = re.fullmatch(r"(v4l2|depthai|replay)(?::(.+?))?(?:@(\d+)x(\d+))?", spec.strip())
+    if not m:
+        raise ValueError(f"cannot read source {spec!r}; use {SPEC_HELP}")
+    kind, target = m[1], m[2] or ""
+    size = (int(m[3]), int(m[4])) if m[3] else None
+    if kind in ("v4l2", "replay") and not target:
+        raise ValueError(f"source {spec!r} needs a target: {SPEC_HELP}")
+    return kind, target, size
+
+
+def open_source(spec: str) -> FrameSource:
+    kind, target, size = parse_spec(spec)
+    if kind == "v4l2":
+        from .v4l2 import V4L2Source
+        return V4L2Source(target, size)
+    if kind == "depthai":
+        from .oak import DepthAISource
+        return DepthAISource(target or None, size)
+    from .replay import ReplaySource
+    return ReplaySource(target)
