@@ -44,16 +44,19 @@ def balanced_scenes(space: SceneSpace, n: int, rng: np.random.Generator) -> list
 
 
 def render_examples(space: SceneSpace, scenes: list[dict], renderer, folder: Path, label: str) -> list[Example]:
-    """Render each scene once into ``folder``; images already there (same scene) are kept."""
+    """Render each scene once into ``folder``; images already there (same scene, same renderer
+    settings as far as the renderer's cache key tells) are kept."""
     folder.mkdir(parents=True, exist_ok=True)
     progress = Progress(len(scenes), label=f"rendering {label}", verdicts=False)
     examples = []
     for i, scene in enumerate(scenes):
         canonical = space.canonical(scene)
         image, meta = folder / f"{i:05d}.png", folder / f"{i:05d}.json"
-        if not (image.exists() and meta.exists() and json.loads(meta.read_text()) == canonical):
+        key = renderer.cache_key(canonical) if hasattr(renderer, "cache_key") else None
+        wanted = {"scene": canonical, "render_key": key}
+        if not (image.exists() and meta.exists() and json.loads(meta.read_text()) == wanted):
             renderer.render(canonical, image)
-            meta.write_text(json.dumps(canonical))
+            meta.write_text(json.dumps(wanted))
         examples.append(Example(image, canonical))
         progress.update()
     progress.close()

@@ -1,0 +1,243 @@
+"""Loose objects: child seat (front- or rear-facing) with an optional baby, suitcase, phone, cola bottle,
+drink can. Each is built the first time a scene needs it (never for scenes that do not), then only
+shown, hidden, moved or recoloured."""
+from __future__ import annotations
+
+import math
+
+import bpy
+from mathutils import Vector
+
+from ..labels import INSTANCE_ID
+from . import mesh as M
+from .cabin import euler_deg
+
+LUGGAGE = {"YELLOW": (0.78, 0.50, 0.01), "ANTHRACITE": (0.028, 0.030, 0.033)}
+
+
+class Group:
+    """Objects that move together: built at the origin in local coordinates, placed by a parent empty."""
+
+    def __init__(self, name: str, coll):
+        self.root = bpy.data.objects.new(name, None)
+        coll.objects.link(self.root)
+        self.coll, self.parts = coll, []
+        self.asset = False   # imported from a rig asset rather than built here
+
+    def add(self, obj):
+        obj.parent = self.root
+        self.parts.append(obj)
+        return obj
+
+    def show(self, visible: bool) -> None:
+        for obj in self.parts:
+            obj.hide_render = not visible
+
+    def place(self, location, rotation) -> None:
+        self.root.location, self.root.rotation_euler = location, rotation
+
+
+# ---------------------------------------------------------------------- builders (local coordinates)
+def build_child_seat(coll, front_facing: bool) -> Group:
+    """Front-facing: upright booster shell with tall back and side wings, facing +x.
+    Rear-facing: a reclined infant carrier with a carry handle whose child looks towards the rear."""
+    g = Group("child_seat_" + ("front" if front_facing else "rear"), coll)
+    pid = INSTANCE_ID["child_seat"]
+    shell = M.material("child_seat_shell", (0.03, 0.03, 0.035), roughness=0.6)
+    pad = M.material("child_seat_pad", (0.30, 0.02, 0.02), roughness=0.9)
+    if front_facing:
+        g.add(M.box("cs_base", (0.0, 0, 0.07), (0.42, 0.42, 0.14), shell, coll, pid, rounded=0.1))
+        g.add(M.box("cs_cushion", (0.03, 0, 0.16), (0.34, 0.32, 0.06), pad, coll, pid, rounded=0.3))
+        g.add(M.box("cs_back", (-0.17, 0, 0.44), (0.08, 0.40, 0.62), shell, coll, pid, rounded=0.2, rotation=(0, -0.12, 0)))
+        g.add(M.box("cs_backpad", (-0.12, 0, 0.42), (0.03, 0.30, 0.52), pad, coll, pid, rounded=0.3, rotation=(0, -0.12, 0)))
+        for side in (1, -1):
+            g.add(M.box(f"cs_wing{side}", (-0.06, side * 0.20, 0.33), (0.26, 0.05, 0.34), shell, coll, pid, rounded=0.2))
+            g.add(M.box(f"cs_headwing{side}", (-0.12, side * 0.17, 0.66), (0.18, 0.05, 0.20), shell, coll, pid, rounded=0.2))
+    else:
+        # the carrier's back plate rises towards the dashboard (+x): the child lies facing the rear, up
+        recline = math.radians(35)
+        g.add(M.box("cs_base", (0.0, 0, 0.06), (0.46, 0.40, 0.12), shell, coll, pid, rounded=0.1))
+        g.add(M.box("cs_plate", (0.04, 0, 0.26), (0.56, 0.38, 0.06), shell, coll, pid, rounded=0.2, rotation=(0, -recline, 0)))
+        g.add(M.box("cs_platepad", (0.02, 0, 0.29), (0.50, 0.30, 0.03), pad, coll, pid, rounded=0.3, rotation=(0, -recline, 0)))
+        for side in (1, -1):
+            g.add(M.box(f"cs_side{side}", (0.02, side * 0.19, 0.30), (0.52, 0.04, 0.20), shell, coll, pid, rounded=0.2,
+                        rotation=(0, -recline, 0)))
+        handle = g.add(M.new_object("cs_handle", M.unit_torus(1.0, 0.09), shell, coll, pid))
+        handle.location, handle.rotation_euler, handle.scale = (0.0, 0, 0.30), (math.pi / 2, 0, 0), (0.2, 0.2, 0.2)
+    return g
+
+
+def build_child(coll, front_facing: bool) -> Group:
+    """A toddler sitting upright (front-facing seat) or a baby lying reclined (rear-facing carrier)."""
+    g = Group("child_" + ("front" if front_facing else "rear"), coll)
+    pid = INSTANCE_ID["child"]
+    skin = M.material("skin", (0.50, 0.30, 0.21))
+    suit = M.material("child_suit", (0.20, 0.45, 0.75), roughness=0.9)
+    dark = M.material("pupil", (0.01, 0.008, 0.006))
+    hair = M.material("hair", (0.035, 0.018, 0.010))
+    if front_facing:
+        hip, up = Vector((-0.02, 0, 0.22)), Vector((-0.12, 0, 1)).normalized()
+        fwd = Vector((1, 0, 0.12)).normalized()
+    else:
+        # lying on the plate, head towards +x and up, looking up and back
+        hip, up = Vector((-0.14, 0, 0.22)), Vector((math.cos(math.radians(35)), 0, math.sin(math.radians(35))))
+        fwd = Vector((-math.sin(math.radians(35)), 0, math.cos(math.radians(35))))
+    chest = hip + up * 0.2
+    head = chest + up * 0.12
+    body = g.add(M.new_object("child_body", M.unit_sphere(), suit, coll, pid))
+    M.place_capsule(body, hip, chest, 0.085)
+    g.add(M.ellipsoid("child_head", head, (0.075, 0.07, 0.078), skin, coll, pid))
+    g.add(M.ellipsoid("child_hair", head - fwd * 0.02 + up * 0.02, (0.07, 0.072, 0.07), hair, coll, pid))
+    for side in (1, -1):
+        g.add(M.ellipsoid(f"child_eye{side}", head + fwd * 0.068 + Vector((0, side * 0.026, 0)) + up * 0.01,
+                          (0.008, 0.009, 0.009), dark, coll, pid))
+        arm = g.add(M.new_object(f"child_arm{side}", M.unit_sphere(), suit, coll, pid))
+        M.place_capsule(arm, chest + Vector((0, side * 0.09, 0)), chest + fwd * 0.12 + Vector((0, side * 0.11, -0.06)), 0.03)
+        leg = g.add(M.new_object(f"child_leg{side}", M.unit_sphere(), suit, coll, pid))
+        # seated toddler: legs along the seat; lying baby: legs towards the feet end, knees up a little
+        foot = fwd * 0.22 if front_facing else -up * 0.18 + fwd * 0.06
+        M.place_capsule(leg, hip + Vector((0, side * 0.05, 0)), hip + foot + Vector((0, side * 0.06, 0.0)), 0.04)
+    return g
+
+
+def build_luggage(coll) -> tuple[Group, bpy.types.Material]:
+    """A hard-shell cabin trolley, 0.40 x 0.23 x 0.55 m, standing on the seat."""
+    g = Group("luggage", coll)
+    pid = INSTANCE_ID["luggage"]
+    body_mat = M.material("luggage_shell", LUGGAGE["YELLOW"], roughness=0.35, specular=0.6)
+    dark = M.material("luggage_trim", (0.015, 0.015, 0.015), roughness=0.5)
+    g.add(M.box("lug_body", (0, 0, 0.295), (0.23, 0.40, 0.55), body_mat, coll, pid, rounded=0.12))
+    for k, y in enumerate((-0.12, -0.04, 0.04, 0.12)):  # moulded ribs
+        g.add(M.box(f"lug_rib{k}", (0.117, y, 0.295), (0.006, 0.018, 0.48), body_mat, coll, pid, rounded=0.3))
+    g.add(M.box("lug_seam", (0, 0, 0.295), (0.236, 0.406, 0.012), dark, coll, pid))
+    g.add(M.box("lug_handle", (0, 0, 0.585), (0.04, 0.14, 0.025), dark, coll, pid, rounded=0.3))
+    for k, (x, y) in enumerate(((0.08, 0.16), (0.08, -0.16), (-0.08, 0.16), (-0.08, -0.16))):
+        g.add(M.cylinder(f"lug_wheel{k}", (x, y, 0.0), 0.022, 0.025, dark, coll, pid, 10))
+    return g, body_mat
+
+
+def build_phone(coll) -> Group:
+    """A 150 x 72 x 8 mm phone, long axis along local y, lit screen on local +z."""
+    g = Group("phone", coll)
+    pid = INSTANCE_ID["phone"]
+    case = M.material("phone_case", (0.01, 0.01, 0.012), roughness=0.3)
+    screen = M.material("phone_screen", (0.02, 0.03, 0.05), roughness=0.1,
+                        emission=(0.35, 0.55, 1.0), emission_strength=1.6)
+    g.add(M.box("phone_body", (0, 0, 0), (0.074, 0.152, 0.009), case, coll, pid, rounded=0.15))
+    g.add(M.box("phone_screen", (0, 0, 0.0047), (0.066, 0.140, 0.001), screen, coll, pid))
+    return g
+
+
+def build_cola_bottle(coll) -> Group:
+    """A 1 l cola bottle (dark liquid, red label), 0.30 m tall."""
+    g = Group("cola_bottle", coll)
+    pid = INSTANCE_ID["cola_bottle"]
+    liquid = M.material("cola", (0.04, 0.012, 0.005), roughness=0.08, specular=0.9)
+    label = M.material("cola_label", (0.6, 0.01, 0.01), roughness=0.5)
+    cap = M.material("cola_cap", (0.6, 0.01, 0.01), roughness=0.4)
+    g.add(M.cylinder("bottle_body", (0, 0, 0), 0.043, 0.19, liquid, coll, pid))
+    g.add(M.cylinder("bottle_label", (0, 0, 0.09), 0.0445, 0.07, label, coll, pid))
+    g.add(M.ellipsoid("bottle_shoulder", (0, 0, 0.19), (0.043, 0.043, 0.07), liquid, coll, pid))
+    g.add(M.cylinder("bottle_neck", (0, 0, 0.22), 0.016, 0.06, liquid, coll, pid))
+    g.add(M.cylinder("bottle_cap", (0, 0, 0.275), 0.018, 0.022, cap, coll, pid))
+    return g
+
+
+def build_can(coll) -> Group:
+    """A 330 ml drink can: red with silver ends."""
+    g = Group("can", coll)
+    pid = INSTANCE_ID["can"]
+    red = M.material("can_red", (0.55, 0.01, 0.01), roughness=0.25, metallic=0.6)
+    silver = M.material("can_top", (0.6, 0.6, 0.62), roughness=0.2, metallic=1.0)
+    g.add(M.cylinder("can_body", (0, 0, 0.01), 0.033, 0.10, red, coll, pid))
+    g.add(M.cylinder("can_bottom", (0, 0, 0.0), 0.029, 0.01, silver, coll, pid))
+    g.add(M.cylinder("can_top", (0, 0, 0.11), 0.029, 0.008, silver, coll, pid))
+    return g
+
+
+# ---------------------------------------------------------------------- what a scene asks for
+class Objects:
+    def __init__(self, rig: dict, coll, importer=None):
+        self.rig, self.coll = rig, coll
+        self.anchors = {k: Vector(v) for k, v in rig["anchors"].items()}
+        self.importer = importer   # builds a Group from a rig asset, or None
+        self.groups: dict[str, Group] = {}
+        self.luggage_mat = None
+
+    def _group(self, key: str, build) -> Group:
+        if key not in self.groups:
+            part = key.split(":")[0]
+            asset = self.importer(part) if self.importer else None
+            self.groups[key] = asset or build()
+        return self.groups[key]
+
+    def _show_only(self, prefix: str, keep: str | None) -> None:
+        for key, group in self.groups.items():
+            if key.startswith(prefix):
+                group.show(key == keep)
+
+    def apply(self, f: dict, hand_pose) -> None:
+        self._child_seat(f)
+        self._luggage(f)
+        self._phone(f, hand_pose)
+        self._simple("cola_bottle", f.get("cola_bottle") == "YES", build_cola_bottle, self.anchors["cola_bottle"])
+        self._simple("can", f.get("can") == "YES", build_can, self.anchors["can"])
+
+    def _child_seat(self, f: dict) -> None:
+        if f.get("child_seat") != "YES":
+            self._show_only("child_seat:", None)
+            self._show_only("child:", None)
+            return
+        front = f["child_seat_orientation"] == "FRONT_FACING"
+        seat_key = f"child_seat:{'front' if front else 'rear'}"
+        seat = self._group(seat_key, lambda: build_child_seat(self.coll, front))
+        # an imported seat is one model facing +x: turn it round for rear-facing
+        seat.place(self.anchors["child_seat"], (0, 0, math.pi if seat.asset and not front else 0))
+        self._show_only("child_seat:", seat_key)
+        child_key = f"child:{'front' if front else 'rear'}" if f["child"] == "YES" else None
+        if child_key:
+            child = self._group(child_key, lambda: build_child(self.coll, front))
+            child.place(self.anchors["child_seat"], (0, 0, 0))
+        self._show_only("child:", child_key)
+
+    def _luggage(self, f: dict) -> None:
+        if f.get("luggage") != "YES":
+            self._show_only("luggage", None)
+            return
+        def build():
+            group, self.luggage_mat = build_luggage(self.coll)
+            return group
+        group = self._group("luggage", build)
+        if self.luggage_mat is not None:
+            M.set_colour(self.luggage_mat, LUGGAGE[f["luggage_colour"]])
+        else:  # an imported asset: tint every material it brought
+            for obj in group.parts:
+                for slot in obj.material_slots:
+                    if slot.material and slot.material.node_tree and "Principled BSDF" in slot.material.node_tree.nodes:
+                        M.set_colour(slot.material, LUGGAGE[f["luggage_colour"]])
+        anchor = self.anchors[f"luggage_{f['luggage_position']}"]
+        group.place(anchor, (0, 0, math.radians(f["luggage_orientation"])))
+        group.show(True)
+
+    def _phone(self, f: dict, hand_pose) -> None:
+        in_hand = hand_pose is not None
+        if f.get("phone") != "YES" and not in_hand:
+            self._show_only("phone", None)
+            return
+        group = self._group("phone", lambda: build_phone(self.coll))
+        if in_hand:
+            point, position = hand_pose
+            group.place(point, euler_deg(self.rig["phone_positions"][position]["rotation_deg"]))
+        else:
+            taken = f.get("child_seat") == "YES" or (f.get("luggage") == "YES" and f.get("luggage_position") == "PASSENGER")
+            anchor = self.anchors["phone_loose_alt" if taken else "phone_loose"]
+            group.place(anchor + Vector((0, 0, 0.006)), (0, 0, math.radians(75)))
+        group.show(True)
+
+    def _simple(self, key: str, present: bool, build, anchor: Vector) -> None:
+        if not present:
+            self._show_only(key, None)
+            return
+        group = self._group(key, lambda: build(self.coll))
+        group.place(anchor, (0, 0, 0))
+        group.show(True)

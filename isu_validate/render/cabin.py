@@ -1,0 +1,85 @@
+"""Cabin rigs (``rigs/cabins/*.toml``): seat, anchor and phone-position geometry, lighting, optional assets."""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import tomllib
+from pathlib import Path
+
+from ..paths import resolve_rig
+
+PHONE_POSITIONS = tuple(f"P{i}" for i in range(1, 11))
+ASSET_PARTS = ("cabin", "driver_seat", "passenger_seat", "rear_bench", "steering_wheel",
+               "luggage", "child_seat", "phone", "cola_bottle", "can")
+ASSET_SUFFIXES = (".glb", ".gltf", ".obj", ".fbx")
+_REQUIRED = {"shell": ("x_rear", "x_front", "half_width", "roof", "belt_line", "dashboard_top"),
+             "steering_wheel": ("centre", "radius", "tilt_deg"),
+             "seat_belt": ("upper_anchor", "buckle", "lap_anchor"),
+             "anchors": ("child_seat", "luggage_PASSENGER", "luggage_BACK", "phone_loose", "phone_loose_alt",
+                         "cola_bottle", "can", "interior_light", "rear_light"),
+             "lighting": ("environment", "environment_strength", "window_light_w", "interior_light_w")}
+
+
+class CabinRigError(ValueError):
+    """A cabin rig file is missing something or names an asset that cannot be used."""
+
+
+def load_cabin(name_or_path: str | os.PathLike = "default") -> dict:
+    """The cabin rig as a plain dict (sent to the Blender worker as JSON); asset paths made absolute."""
+    path = Path(resolve_rig("cabins", name_or_path))
+    try:
+        raw = tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise CabinRigError(f"{path}: not valid TOML: {exc}") from None
+    _check(raw, str(path))
+    raw["assets"] = _resolve_assets(raw.get("assets", {}), path)
+    raw["source"] = str(path)
+    return raw
+
+
+def cabin_hash(cabin: dict) -> str:
+    """Identifies the cabin's content (asset files by their bytes): part of the render cache key."""
+    content = {k: v for k, v in cabin.items() if k not in ("source", "name")}
+    digest = hashlib.sha256(json.dumps(content, sort_keys=True, default=str).encode())
+    for part in sorted(cabin.get("assets", {})):
+        digest.update(Path(cabin["assets"][part]["file"]).read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def _check(raw: dict, where: str) -> None:
+    for table, keys in _REQUIRED.items():
+        if not isinstance(raw.get(table), dict):
+            raise CabinRigError(f"{where}: missing [{table}] table (copy it from rigs/cabins/default.toml)")
+        missing = [k for k in keys if k not in raw[table]]
+        if missing:
+            raise CabinRigError(f"{where}: [{table}] lacks {', '.join(missing)} (see rigs/cabins/default.toml)")
+    seats = raw.get("seats", {})
+    for seat in ("driver", "passenger", "rear"):
+        if seat not in seats:
+            raise CabinRigError(f"{where}: missing [seats.{seat}] (see rigs/cabins/default.toml)")
+    positions = raw.get("phone_positions", {})
+    missing = [p for p in PHONE_POSITIONS if p not in positions]
+    if missing:
+        raise CabinRigError(f"{where}: [phone_positions] lacks {', '.join(missing)}; each needs hand, "
+                            f"relative_to, offset and rotation_deg")
+    for name, spec in positions.items():
+        if spec.get("hand") not in ("left", "right") or spec.get("relative_to") not in ("head", "shoulder", "wheel"):
+            raise CabinRigError(f"{where}: [phone_positions.{name}] needs hand = 'left'|'right' and "
+                                f"relative_to = 'head'|'shoulder'|'wheel'")
+
+
+def _resolve_assets(assets: dict, rig_path: Path) -> dict:
+    resolved = {}
+    for part, spec in assets.items():
+        if part not in ASSET_PARTS:
+            raise CabinRigError(f"{rig_path}: [assets.{part}] is not a part that can be replaced; "
+                                f"parts: {', '.join(ASSET_PARTS)}")
+        spec = {"file": spec} if isinstance(spec, str) else dict(spec)
+        file = (rig_path.parent / spec.get("file", "")).resolve()
+        if file.suffix.lower() not in ASSET_SUFFIXES or not file.is_file():
+            raise CabinRigError(f"{rig_path}: [assets.{part}] file {file} must be an existing "
+                                f"{'/'.join(ASSET_SUFFIXES)} file (relative paths start at the rig file)")
+        spec["file"] = str(file)
+        resolved[part] = spec
+    return resolved

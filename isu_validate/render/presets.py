@@ -1,0 +1,47 @@
+"""Render presets: speed against error. Measured with ``isu-validate bench render`` (see the issue)."""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, replace
+
+
+@dataclass(frozen=True)
+class Preset:
+    name: str
+    scale: float            # resolution relative to the camera rig's image
+    samples: int            # Cycles samples per pixel (fixed; adaptive sampling gave nothing here)
+    denoise: bool           # OpenImageDenoise
+    prefilter: str          # OIDN prefilter of albedo/normal guides: NONE, FAST, ACCURATE
+    max_bounces: int
+    diffuse_bounces: int
+    glossy_bounces: int
+    clamp_indirect: float   # firefly clamp (0 = off)
+    filter_width: float     # pixel filter (px)
+    threads: int = 0        # 0 = all cores
+
+    def to_worker(self) -> dict:
+        d = asdict(self)
+        d.pop("name")
+        d.pop("scale")
+        return d
+
+
+# Measured on the shared 2-core machine with `isu-validate bench render` (see the issue for the table):
+# per-pixel path tracing dominates (about 1.5 CPU-seconds per sample at 640x480), the fixed cost per
+# frame is ~0.5 CPU-s, so presets trade samples and resolution. OIDN with albedo/normal guides makes
+# 1-2 samples usable; extra bounces beyond 2 changed SSIM by < 0.001 here.
+PRESETS = {
+    "draft": Preset("draft", 0.5, 1, True, "FAST", 2, 1, 1, 3.0, 1.5),
+    "standard": Preset("standard", 1.0, 2, True, "FAST", 2, 1, 1, 5.0, 1.5),
+    "final": Preset("final", 1.0, 16, True, "ACCURATE", 4, 3, 2, 10.0, 1.5),
+    # calibration targets (render_board): no denoiser, whose edge artefacts move ChArUco corners by
+    # ~0.3 px at 2 spp; 64 plain samples give 0.08 px RMS corner error against the rig's projection
+    "calibration": Preset("calibration", 1.0, 64, False, "NONE", 1, 1, 0, 3.0, 1.5),
+    # the converged reference of `bench render` (not meant for runs)
+    "reference": Preset("reference", 1.0, 512, True, "ACCURATE", 8, 4, 4, 0.0, 1.5),
+}
+
+
+def get_preset(name: str, **overrides) -> Preset:
+    if name not in PRESETS:
+        raise ValueError(f"unknown render preset {name!r}; presets: {', '.join(PRESETS)}")
+    return replace(PRESETS[name], **overrides) if overrides else PRESETS[name]

@@ -1,0 +1,168 @@
+"""The Blender renderer behind the ``Renderer`` protocol: validates a scene, looks it up in the cache,
+asks the warm worker for the passes, writes the outputs, and survives a worker crash or hang (one
+restart and retry, then RenderError)."""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+import tempfile
+import time
+from pathlib import Path
+from typing import Any, Mapping
+
+from ..protocols import RenderError, RenderResult
+from ..space import SceneSpace, load_space
+from .cabin import cabin_hash, load_cabin
+from .cache import RenderCache
+from .camera import CameraRig, load_camera, pinhole_plan
+from .outputs import channel_paths, parse_channels, write_outputs
+from .presets import Preset, get_preset
+from .worker import BlenderWorker, WorkerCrashed, WorkerFailed, WorkerTimeout
+
+# bump when the scene content or the outputs change: it is part of every cache key
+RENDERER_VERSION = "isu-blender-1"
+
+# what the worker shows for a feature the scene space does not have (or that is inactive)
+DEFAULTS = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height": "H2", "driver_weight": "W2",
+            "phone_position": "NONE", "seat_belt": "YES", "tshirt_colour": "WHITE", "child_seat": "NO",
+            "child": "NO", "child_seat_orientation": "FRONT_FACING", "car_lights": "OFF",
+            "external_light": "MEDIUM", "luggage": "NO", "luggage_orientation": 60.0,
+            "luggage_position": "BACK", "luggage_colour": "YELLOW", "phone": "NO", "cola_bottle": "NO", "can": "NO"}
+
+
+class BlenderRenderer:
+    def __init__(self, preset: str | Preset = "draft", camera: str | os.PathLike | CameraRig = "default",
+                 cabin: str | os.PathLike | dict = "default", channels=(), cache_dir=None, log_dir=None,
+                 timeout_s: float = 240.0, space: SceneSpace | str | None = None, threads: int = 0):
+        self.preset = get_preset(preset, threads=threads) if isinstance(preset, str) else preset
+        self.rig = camera if isinstance(camera, CameraRig) else load_camera(camera)
+        self.render_rig = self.rig.scaled(self.preset.scale)
+        self.plan = pinhole_plan(self.render_rig)
+        self.cabin = cabin if isinstance(cabin, dict) else load_cabin(cabin)
+        self.channels = parse_channels(channels)
+        self.space = space if isinstance(space, SceneSpace) else load_space(space or "isu-paper")
+        self.cache = RenderCache(cache_dir) if cache_dir else None
+        self.log_path = Path(log_dir or Path(tempfile.gettempdir()) / "isu-validate-logs") / f"blender-{os.getpid()}.log"
+        self.timeout_s = timeout_s
+        self._tmp = Path(tempfile.mkdtemp(prefix="isu-render-"))
+        self._worker: BlenderWorker | None = None
+        self._owner = os.getpid()
+        self._count = 0
+        self.unrendered = sorted(set(self.space.names) - set(DEFAULTS))
+        self._identity = hashlib.sha256(json.dumps(
+            [RENDERER_VERSION, self.render_rig.hash, cabin_hash(self.cabin), self.preset.to_worker(),
+             self.preset.scale, self.channels], sort_keys=True).encode()).hexdigest()
+
+    # ------------------------------------------------------------------ protocol
+    def render(self, scene: Mapping[str, Any], out: Path) -> RenderResult:
+        """Render a valid scene to ``out`` (PNG). An invalid scene raises SpaceError (a ValueError)
+        naming the problem before Blender sees it; a failed render raises RenderError."""
+        t0 = time.perf_counter()
+        out = Path(out)
+        canonical = self.space.check(scene)
+        key = self.cache_key(canonical)
+        where = channel_paths(out)
+        if self.cache:
+            hit = self.cache.get(key, out, where)
+            if hit:
+                timings = {"update_s": 0.0, "render_s": 0.0, "write_s": time.perf_counter() - t0}
+                timings["total_s"] = time.perf_counter() - t0
+                self._write_label(where["label"], canonical, hit["meta"].get("visible", {}), timings, key, True)
+                return RenderResult(out, {**hit["channels"], "label": where["label"]}, timings, cached=True)
+        paths, visible, timings = self._render_with_retry({**DEFAULTS, **canonical}, out, {}, tag=key[:12])
+        timings["total_s"] = time.perf_counter() - t0
+        if self.cache:
+            self.cache.put(key, out, paths, {"scene": canonical, "visible": visible, "timings": timings})
+        self._write_label(where["label"], canonical, visible, timings, key, False)
+        return RenderResult(out, {**paths, "label": where["label"]}, timings, cached=False)
+
+    def close(self) -> None:
+        if self._worker is not None and os.getpid() == self._owner:
+            self._worker.close()
+        self._worker = None
+        shutil.rmtree(self._tmp, ignore_errors=True)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    # ------------------------------------------------------------------ extras
+    def render_extras(self, scene: Mapping[str, Any] | None, out: Path, extras: dict) -> RenderResult:
+        """Render a scene (None: the empty cabin, no driver) with extras such as a board; never cached."""
+        t0 = time.perf_counter()
+        features = {**DEFAULTS, **(self.space.check(scene) if scene is not None else {})}
+        if scene is None:
+            extras = {"hide_driver": True, **extras}
+        paths, _, timings = self._render_with_retry(features, Path(out), extras, tag="extras")
+        timings["total_s"] = time.perf_counter() - t0
+        return RenderResult(Path(out), paths, timings)
+
+    def cache_key(self, canonical: Mapping[str, Any]) -> str:
+        return hashlib.sha256(f"{self._identity}:{self.space.key(canonical)}".encode()).hexdigest()
+
+    @property
+    def worker_pid(self) -> int | None:
+        return self._worker.pid if self._worker else None
+
+    # ------------------------------------------------------------------ internals
+    def _ensure_worker(self) -> BlenderWorker:
+        if os.getpid() != self._owner:   # a copy in a forked pool process: start its own worker
+            self._worker, self._owner = None, os.getpid()
+            self._tmp = Path(tempfile.mkdtemp(prefix="isu-render-"))
+        if self._worker is None or not self._worker.alive:
+            if self._worker is not None:
+                self._worker.kill()
+            self._worker = BlenderWorker(self.log_path)
+            try:
+                self._worker.start(self.cabin, timeout_s=max(self.timeout_s, 120.0))
+            except (WorkerCrashed, WorkerTimeout, WorkerFailed) as exc:
+                self._worker.kill()
+                self._worker = None
+                raise RenderError(f"could not start the Blender worker: {exc}") from exc
+        return self._worker
+
+    def _render_with_retry(self, features: dict, out: Path, extras: dict, tag: str):
+        last = None
+        for attempt in (1, 2):
+            try:
+                return self._render_once(features, out, extras, tag)
+            except (WorkerCrashed, WorkerTimeout) as exc:   # restart and retry once
+                last = exc
+                if self._worker is not None:
+                    self._worker.kill()
+                self._worker = None
+            except WorkerFailed as exc:                      # a Python error in Blender: deterministic
+                raise RenderError(f"Blender failed on this scene: {exc} (log: {self.log_path})") from exc
+        raise RenderError(f"render failed twice (worker restarted in between): {last}")
+
+    def _render_once(self, features: dict, out: Path, extras: dict, tag: str):
+        worker = self._ensure_worker()
+        self._count += 1
+        exr = self._tmp / f"frame-{self._count}.exr"
+        camera = {**self.plan.blender_camera(), "position": list(self.render_rig.position),
+                  "rotation": [list(r) for r in self.render_rig.rotation]}
+        reply = worker.request({"op": "render", "features": features, "camera": camera, "extras": extras,
+                                "preset": self.preset.to_worker(), "exr": str(exr), "tag": tag}, self.timeout_s)
+        t = time.perf_counter()
+        try:
+            paths, visible = write_outputs(exr, self.plan, out, self.channels)
+        except (OSError, KeyError, ValueError) as exc:   # unreadable passes or an unwritable output
+            raise RenderError(f"could not write the render of this scene to {out}: {exc}") from exc
+        finally:
+            exr.unlink(missing_ok=True)
+        timings = {"update_s": reply["update_s"], "render_s": reply["render_s"],
+                   "write_s": reply["save_s"] + time.perf_counter() - t, "worker_cpu_s": reply["cpu_s"]}
+        return paths, visible, timings
+
+    def _write_label(self, path: Path, canonical: dict, visible: dict, timings: dict, key: str, cached: bool):
+        label = {"scene": canonical, "space": self.space.name, "preset": self.preset.name,
+                 "renderer": RENDERER_VERSION, "cache_key": key, "cached": cached,
+                 "camera": self.render_rig.to_dict(), "camera_source": self.rig.source,
+                 "cabin": self.cabin.get("source"), "visible": visible, "timings": timings}
+        if self.unrendered:
+            label["unrendered_features"] = self.unrendered
+        path.write_text(json.dumps(label, indent=1))
