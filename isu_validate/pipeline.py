@@ -35,6 +35,7 @@ class PipelineConfig:
     channels: tuple[str, ...] = ()
     sut_timeout_s: float = 60.0
     sut_options: dict = field(default_factory=dict)  # adapter options (never secrets: keys come from env)
+    render_threads: int = 0           # Cycles threads per renderer (0 = all cores; split them across workers)
     factory: str = "isu_validate.pipeline:build_components"
 
     def to_dict(self) -> dict:
@@ -71,7 +72,7 @@ def build_components(config: PipelineConfig, space: SceneSpace) -> Components:
     run_dir = Path(config.run_dir)
     renderer = open_renderer(preset=config.preset, camera=config.camera, cabin=config.cabin,
                              channels=config.channels, cache_dir=run_dir / "cache" / "render",
-                             log_dir=run_dir / "logs")
+                             log_dir=run_dir / "logs", space=space, threads=config.render_threads)
     sut = open_sut(config.sut, space=space, repeats=config.repeats, cache_dir=run_dir / "cache" / "sut",
                    timeout_s=config.sut_timeout_s, **config.sut_options)
     judge = make_judge(config.mode, space, threshold=config.threshold)

@@ -2,7 +2,9 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -60,6 +62,7 @@ def config_from_args(args) -> RunConfig:
         pipeline = PipelineConfig(**{**stored_pipeline, "run_dir": str(args.out),
                                      "channels": tuple(stored_pipeline["channels"])})
         stored.update(workers=args.workers, cluster=args.cluster)
+        pipeline = dataclasses.replace(pipeline, render_threads=render_threads(args.workers))
         if args.budget is not None:
             stored["budget_tests"] = args.budget
         if args.budget_time is not None:
@@ -72,11 +75,16 @@ def config_from_args(args) -> RunConfig:
         run_dir=str(args.out), space=args.space, sut=args.sut, mode=args.mode, threshold=args.threshold,
         prompt=args.prompt, repeats=args.repeats, preset=args.preset, camera=args.camera, cabin=args.cabin,
         channels=tuple(c for c in args.channels.split(",") if c), sut_timeout_s=args.sut_timeout,
-        sut_options=parse_options(args.sut_option),
+        sut_options=parse_options(args.sut_option), render_threads=render_threads(args.workers),
         factory=args.pipeline_factory)
     return RunConfig(pipeline=pipeline, algorithm=args.algorithm, pop_size=args.pop_size, seed=args.seed,
                      budget_tests=budget_tests, budget_s=args.budget_time, workers=args.workers,
                      cluster=args.cluster)
+
+
+def render_threads(workers: int) -> int:
+    """Split the cores between parallel renderers (0 = Blender takes all, for one worker)."""
+    return 0 if workers <= 1 else max(1, (os.cpu_count() or 1) // workers)
 
 
 def cmd_run(args) -> int:

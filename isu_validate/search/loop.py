@@ -51,6 +51,7 @@ class RunConfig:
         for volatile in ("workers", "cluster", "budget_tests", "budget_s"):
             data.pop(volatile)
         data["pipeline"].pop("run_dir")
+        data["pipeline"].pop("render_threads")  # how the work is spread, not what it computes
         return json.loads(json.dumps(data))  # as stored in run.json (tuples become lists)
 
 
