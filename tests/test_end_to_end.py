@@ -28,4 +28,4 @@ def test_a_small_real_run_renders_asks_judges_and_reports(tmp_path, capsys):
         asked = {k for k in label["truth"]}
         assert {k[2:] for k, v in row.items() if k.startswith("y.") and v} <= asked
     html = (run_dir / "report.html").read_text()
-    assert "<html" in html.lower() and "g0000-i000" in html
+    assert "<html" in html.lower() and "Failure rates at thresholds" in html and "reference" in html

@@ -8,7 +8,12 @@ from __future__ import annotations
 import importlib
 
 BENCH_MODULES = [
+    "isu_validate.render.bench",   # bench render
+    "capture.bench",          # bench calib
     "isu_validate.search.bench",
+    "isu_validate.evaluate.bench",
+    "isu_validate.realism.bench",  # bench fid
+    "style_transfer.bench",        # bench nst
 ]
 
 

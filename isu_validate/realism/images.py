@@ -1,0 +1,57 @@
+"""Reading image files for the realism metrics: any size, grayscale, palette, RGBA or 16-bit.
+
+Every image becomes float32 RGB on a 0..255 scale. Alpha is dropped (not composited), the
+convention clean-fid and torch-fidelity use, so our numbers stay comparable with theirs.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from PIL import Image, UnidentifiedImageError
+
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp")
+
+
+class ImageError(ValueError):
+    """An image file that cannot be used; the message names the file and the fix."""
+
+
+def read_rgb(path: str | Path) -> np.ndarray:
+    """The image at ``path`` as an (H, W, 3) float32 array in 0..255."""
+    path = Path(path)
+    try:
+        with Image.open(path) as img:
+            img.load()  # decode now, so a truncated file fails here and not later
+            return _to_rgb_float(img)
+    except FileNotFoundError:
+        raise
+    except (UnidentifiedImageError, OSError, SyntaxError) as exc:
+        raise ImageError(f"cannot read image {path}: {exc}; re-export it as PNG or remove it from the set") from exc
+
+
+def _to_rgb_float(img: Image.Image) -> np.ndarray:
+    if img.width < 1 or img.height < 1:
+        raise ImageError("image has no pixels")
+    if img.mode in ("I;16", "I;16B", "I;16L", "I", "F"):
+        # high bit depth grayscale: scale to 0..255 by the format's range, not the image's
+        arr = np.asarray(img, dtype=np.float32)
+        # I;16 is 16-bit by format; plain I (32-bit) is ambiguous, so judge it by its values
+        sixteen = img.mode.startswith("I;16") or (img.mode == "I" and arr.max(initial=0) > 255)
+        top = 65535.0 if sixteen else 255.0
+        grey = np.clip(arr * (255.0 / top), 0, 255)
+        return np.repeat(grey[..., None], 3, axis=2)
+    return np.asarray(img.convert("RGB"), dtype=np.float32)
+
+
+def list_images(folder: str | Path) -> list[Path]:
+    """The image files directly inside ``folder``, sorted by name."""
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise FileNotFoundError(f"image folder {folder} does not exist")
+    found = sorted(p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_SUFFIXES)
+    if not found:
+        raise ImageError(
+            f"folder {folder} holds no images ({', '.join(IMAGE_SUFFIXES)}); "
+            "point to a folder of images, or to a pairs directory as PAIRS_DIR:sim|real|nst")
+    return found
