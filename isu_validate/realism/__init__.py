@@ -1,22 +1,25 @@
 """Realism metrics between image sets: FID and KID on Inception features, numerically sound.
 
-Names are imported on first use (PEP 562): importing the package, as every CLI command
-does through ``isu_validate.realism.images``, must not load torch.
+The feature extractor (torch, TorchScript Inception) is imported on first use (PEP 562):
+every CLI command imports this package through ``isu_validate.realism.images`` and must
+not pay for torch.
 """
-from importlib import import_module
+from .compare import MetricSettings, RealismResult, compare_features
+from .fid import fid, fid_bootstrap, fid_from_stats, trace_sqrt_product
+from .images import ImageError, read_rgb
+from .kid import KIDResult, kid
+from .sets import ImageSet, resolve_set
 
-_EXPORTS = {
-    "MetricSettings": "compare", "RealismResult": "compare", "compare_features": "compare",
-    "FeatureExtractor": "features", "FeatureSettings": "features",
-    "fid": "fid", "fid_bootstrap": "fid", "fid_from_stats": "fid", "trace_sqrt_product": "fid",
-    "ImageError": "images", "read_rgb": "images",
-    "KIDResult": "kid", "kid": "kid",
-    "ImageSet": "sets", "resolve_set": "sets",
-}
-__all__ = sorted(_EXPORTS)
+_LAZY = {"FeatureExtractor", "FeatureSettings"}
+
+__all__ = ["FeatureExtractor", "FeatureSettings", "ImageError", "ImageSet", "KIDResult", "MetricSettings",
+           "RealismResult", "compare_features", "fid", "fid_bootstrap", "fid_from_stats", "kid", "read_rgb",
+           "resolve_set", "trace_sqrt_product"]
 
 
 def __getattr__(name):
-    if name not in _EXPORTS:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    return getattr(import_module(f".{_EXPORTS[name]}", __name__), name)
+    if name in _LAZY:
+        from . import features
+
+        return getattr(features, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
