@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import json
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -19,6 +18,7 @@ import numpy as np
 import tomli_w
 
 from . import lens
+from isu_validate.tomlfile import read_toml as read_toml_file
 
 # A camera at the cabin origin looking forward (+x), image x to the cabin's right (-y),
 # image y down (-z): the pose written before any registration, marked as such.
@@ -100,13 +100,7 @@ def to_json(camera: CameraModel) -> str:
 
 
 def read_toml(path: str | Path) -> CameraModel:
-    path = Path(path)
-    if not path.exists():
-        raise FileNotFoundError(f"camera file {path} does not exist")
-    try:
-        raw = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise CameraFileError(f"{path}: not valid TOML: {exc}") from None
+    raw = read_toml_file(path, CameraFileError, "camera file")
     return from_dict(raw, str(path))
 
 

@@ -14,7 +14,6 @@ pose) gives R_cabin_from_camera and the camera position by PnP on the calibrated
 """
 from __future__ import annotations
 
-import tomllib
 from dataclasses import replace
 from pathlib import Path
 
@@ -23,6 +22,7 @@ import numpy as np
 
 from . import lens
 from .camera_file import CameraModel
+from isu_validate.tomlfile import read_toml
 
 
 class RegistrationError(ValueError):
@@ -32,12 +32,7 @@ class RegistrationError(ValueError):
 def load_markers(path: str | Path) -> tuple[str, dict[int, np.ndarray]]:
     """(dictionary name, {marker id: (4,3) cabin corners}) from a cabin rig or a marker file."""
     path = Path(path)
-    if not path.exists():
-        raise FileNotFoundError(f"marker file {path} does not exist")
-    try:
-        raw = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise RegistrationError(f"{path}: not valid TOML: {exc}") from None
+    raw = read_toml(path, RegistrationError, "marker file")
     table = raw.get("markers")
     if isinstance(table, dict) and "markers" in table:  # a cabin rig with a [markers] table of its own
         raw, table = table, table["markers"]

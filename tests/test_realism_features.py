@@ -3,22 +3,13 @@ import json
 
 import numpy as np
 import pytest
-import torch
 from PIL import Image
 
 from isu_validate.cli import main
 from isu_validate.realism import FeatureExtractor, fid, kid
 
 
-@pytest.fixture(scope="module", autouse=True)
-def few_threads():
-    # a shared 2-core machine: two torch threads, single-threaded BLAS (it spins under contention)
-    from threadpoolctl import threadpool_limits
-    before = torch.get_num_threads()
-    torch.set_num_threads(2)
-    with threadpool_limits(limits=1):
-        yield
-    torch.set_num_threads(before)
+pytestmark = pytest.mark.usefixtures("few_torch_threads")
 
 
 @pytest.fixture(scope="module")

@@ -7,15 +7,7 @@ from PIL import Image
 from style_transfer import FastNetConfig, FastStyleNet, FastTrainConfig, load_model, stylize_fast, train_fast
 
 
-@pytest.fixture(scope="module", autouse=True)
-def few_threads():
-    # a shared 2-core machine: two torch threads, single-threaded BLAS (it spins under contention)
-    from threadpoolctl import threadpool_limits
-    before = torch.get_num_threads()
-    torch.set_num_threads(2)
-    with threadpool_limits(limits=1):
-        yield
-    torch.set_num_threads(before)
+pytestmark = pytest.mark.usefixtures("few_torch_threads")
 
 
 @pytest.fixture(scope="module")

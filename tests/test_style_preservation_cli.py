@@ -4,22 +4,13 @@ import sys
 
 import numpy as np
 import pytest
-import torch
 from PIL import Image, ImageDraw
 
 from isu_validate.cli import main
 from style_transfer.preservation import answer_flips, edge_agreement, ssim_luma, structure_score
 
 
-@pytest.fixture(scope="module", autouse=True)
-def few_threads():
-    # a shared 2-core machine: two torch threads, single-threaded BLAS (it spins under contention)
-    from threadpoolctl import threadpool_limits
-    before = torch.get_num_threads()
-    torch.set_num_threads(2)
-    with threadpool_limits(limits=1):
-        yield
-    torch.set_num_threads(before)
+pytestmark = pytest.mark.usefixtures("few_torch_threads")
 
 
 def test_identical_images_preserve_everything():

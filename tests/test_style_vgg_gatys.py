@@ -9,15 +9,7 @@ from style_transfer.losses import gram
 from style_transfer.vgg import CAFFE_MEAN_BGR, preprocess, weights_path
 
 
-@pytest.fixture(scope="module", autouse=True)
-def few_threads():
-    # a shared 2-core machine: two torch threads, single-threaded BLAS (it spins under contention)
-    from threadpoolctl import threadpool_limits
-    before = torch.get_num_threads()
-    torch.set_num_threads(2)
-    with threadpool_limits(limits=1):
-        yield
-    torch.set_num_threads(before)
+pytestmark = pytest.mark.usefixtures("few_torch_threads")
 
 
 @pytest.fixture(scope="module")

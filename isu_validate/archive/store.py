@@ -82,7 +82,7 @@ class Archive:
         self.db.execute(f"INSERT INTO tests ({quoted}) VALUES ({placeholders})", values)
 
     def get(self, test_id: str) -> TestRecord | None:
-        cur = self.db.execute(f'SELECT * FROM tests WHERE test_id = ?', (test_id,))
+        cur = self.db.execute('SELECT * FROM tests WHERE test_id = ?', (test_id,))
         row = cur.fetchone()
         return self._record(cur, row) if row else None
 

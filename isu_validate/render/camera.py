@@ -14,7 +14,6 @@ import hashlib
 import json
 import math
 import os
-import tomllib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -22,6 +21,7 @@ import cv2
 import numpy as np
 
 from ..paths import resolve_rig
+from ..tomlfile import read_toml
 
 MODELS = ("pinhole", "opencv8", "fisheye")
 _OPENCV_LENGTHS = (0, 4, 5, 8, 12, 14)
@@ -134,10 +134,7 @@ class CameraRig:
 def load_camera(name_or_path: str | os.PathLike = "default") -> CameraRig:
     """A camera rig by shipped name (``default``) or path; raises CameraRigError naming the problem."""
     path = resolve_rig("cameras", name_or_path)
-    try:
-        raw = tomllib.loads(Path(path).read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise CameraRigError(f"{path}: not valid TOML: {exc}") from None
+    raw = read_toml(path, CameraRigError, "camera rig")
     return camera_from_dict(raw, where=str(path))
 
 

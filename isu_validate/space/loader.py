@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import itertools
 import os
-import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -13,6 +12,7 @@ from .conditions import parse_condition
 from .errors import SpaceError
 from .features import parse_feature
 from .space import Constraint, SceneSpace
+from ..tomlfile import read_toml
 
 DEFAULT_SPACE = "isu-paper"
 _MAX_ENUMERATION = 200_000
@@ -24,10 +24,7 @@ def load_space(name_or_path: str | os.PathLike = DEFAULT_SPACE) -> SceneSpace:
         path = resolve_rig("spaces", name_or_path)
     except FileNotFoundError as exc:
         raise SpaceError(str(exc)) from None
-    try:
-        raw = tomllib.loads(Path(path).read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise SpaceError(f"{path}: not valid TOML: {exc}") from None
+    raw = read_toml(path, SpaceError, "scene space")
     return space_from_dict(raw, where=str(path))
 
 

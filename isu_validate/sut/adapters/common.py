@@ -44,3 +44,18 @@ def number(value: Any, name: str, where: str, *, integer: bool = False) -> float
     except (TypeError, ValueError):
         raise SUTConfigError(f"{where}: option {name} must be a number, got {value!r}") from None
 
+
+
+def http_client(opts: Mapping[str, Any], timeout_s: float, redactor, where: str):
+    """The HTTP client with the rate limits and retry policy the adapter options ask for."""
+    from ..http_client import HttpClient, RetryPolicy
+    from ..limits import RateLimiter
+
+    return HttpClient(
+        timeout_s=timeout_s, redactor=redactor,
+        limiter=RateLimiter(number(opts["max_concurrency"], "max_concurrency", where, integer=True),
+                            number(opts["rpm"], "rpm", where)),
+        retry=RetryPolicy(number(opts["max_retries"], "max_retries", where, integer=True),
+                          number(opts["backoff_s"], "backoff_s", where),
+                          number(opts["backoff_max_s"], "backoff_max_s", where),
+                          number(opts["retry_after_max_s"], "retry_after_max_s", where)))

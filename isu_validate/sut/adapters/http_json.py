@@ -23,10 +23,8 @@ from typing import Any
 from ...protocols import SUTRequest
 from ..errors import SUTConfigError, TransportError
 from ..exchange import Exchange
-from ..http_client import HttpClient, RetryPolicy
-from ..limits import RateLimiter
 from ..redact import Redactor
-from .common import fingerprint, image_base64, media_type, number, take_options
+from .common import fingerprint, http_client, image_base64, media_type, take_options
 
 OPTIONS = {"answers_path": "answers", "caption_path": "caption", "key_map": "", "image": "base64",
            "api_key_env": None, "max_concurrency": 4, "rpm": None, "max_retries": 4, "backoff_s": 1.0,
@@ -75,14 +73,7 @@ class HttpJsonAdapter:
         self.id = f"http:{target.split('?', 1)[0]}"
         self.fingerprint = fingerprint("http", target, {k: opts[k] for k in _MAPPING})
         self.redact = Redactor([self._key])
-        self.client = HttpClient(
-            timeout_s=timeout_s, redactor=self.redact,
-            limiter=RateLimiter(number(opts["max_concurrency"], "max_concurrency", where, integer=True),
-                                number(opts["rpm"], "rpm", where)),
-            retry=RetryPolicy(number(opts["max_retries"], "max_retries", where, integer=True),
-                              number(opts["backoff_s"], "backoff_s", where),
-                              number(opts["backoff_max_s"], "backoff_max_s", where),
-                              number(opts["retry_after_max_s"], "retry_after_max_s", where)))
+        self.client = http_client(opts, timeout_s, self.redact, where)
 
     def body(self, request: SUTRequest) -> dict[str, Any]:
         body: dict[str, Any] = {"mode": request.mode, "prompt": request.prompt}

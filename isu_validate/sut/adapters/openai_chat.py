@@ -27,10 +27,8 @@ from urllib.parse import urlparse
 from ...protocols import SUTRequest
 from ..errors import SUTConfigError, TransportError
 from ..exchange import Exchange
-from ..http_client import HttpClient, RetryPolicy
-from ..limits import RateLimiter
 from ..redact import Redactor
-from .common import fingerprint, image_data_url, number, take_options
+from .common import fingerprint, http_client, image_data_url, take_options
 
 DEFAULT_BASE_URL = "https://api.openai.com/v1"
 # Hosts that always need a key: fail at open time, not once per scene.
@@ -70,14 +68,7 @@ class OpenAIChatAdapter:
         self.redact = Redactor([self._key])
         self._json_ok = opts["json_mode"] != "off"
         self._lock = threading.Lock()
-        self.client = HttpClient(
-            timeout_s=timeout_s, redactor=self.redact,
-            limiter=RateLimiter(number(opts["max_concurrency"], "max_concurrency", where, integer=True),
-                                number(opts["rpm"], "rpm", where)),
-            retry=RetryPolicy(number(opts["max_retries"], "max_retries", where, integer=True),
-                              number(opts["backoff_s"], "backoff_s", where),
-                              number(opts["backoff_max_s"], "backoff_max_s", where),
-                              number(opts["retry_after_max_s"], "retry_after_max_s", where)))
+        self.client = http_client(opts, timeout_s, self.redact, where)
 
     # ------------------------------------------------------------------ request
     @property
