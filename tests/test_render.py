@@ -7,7 +7,6 @@ from __future__ import annotations
 import os
 import signal
 import sys
-import threading
 import time
 from pathlib import Path
 
@@ -141,10 +140,17 @@ def test_killed_worker_is_restarted_and_the_scene_retried(renderer, tmp_path):
     renderer.render({**BASE, "tshirt_colour": "BLACK"}, tmp_path / "warm.png")  # worker up
     pid = renderer.worker_pid
     scene = {**BASE, "driver_height": "H4", "external_light": "LOW"}   # not cached yet
-    timer = threading.Timer(0.15, lambda: os.killpg(pid, signal.SIGKILL))
-    timer.start()
+    worker = renderer._worker
+    read_reply = worker._read
+
+    def die_before_replying(timeout_s):
+        # the request has been sent: kill the worker while it works on it (no timing race)
+        worker._read = read_reply
+        os.killpg(pid, signal.SIGKILL)
+        return read_reply(timeout_s)
+
+    worker._read = die_before_replying
     result = renderer.render(scene, tmp_path / "after_crash.png")
-    timer.join()
     assert result.image.is_file() and renderer.worker_pid != pid
 
 
