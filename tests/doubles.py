@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from isu_validate.pipeline import Components
-from isu_validate.protocols import RenderResult, SUTRequest, SUTResponse, Verdict
+from isu_validate.protocols import RenderError, RenderResult, SUTRequest, SUTResponse, Verdict
 
 
 class PaintRenderer:
@@ -23,6 +23,8 @@ class PaintRenderer:
         import cv2
 
         self.calls += 1
+        if os.environ.get("ISU_TEST_FAIL_RENDER_WITH_CAN") and scene.get("can") == "YES":
+            raise RenderError("Blender failed on this scene (test double)")
         digest = hashlib.sha1(self.space.key(scene).encode()).digest()
         img = np.zeros((24, 32, 3), np.uint8) + np.frombuffer(digest[:3], np.uint8)
         cv2.imwrite(str(out), img)
@@ -43,6 +45,8 @@ class BlindSUT:
 
         label = json.loads((Path(request.image).parent.parent / "labels" / (Path(request.image).stem + ".json")).read_text())
         scene = label["scene"]
+        if os.environ.get("ISU_TEST_SUT_ERROR_WITH_BOTTLE") and scene.get("cola_bottle") == "YES":
+            return SUTResponse(raw="<html>502 Bad Gateway</html>", error="HTTP 502 from the SUT (test double)")
         answers = {q.key: q.truth for q in request.questions}
         if scene.get("external_light") == "LOW" and "seat_belt" in answers:
             answers["seat_belt"] = "NO" if answers["seat_belt"] == "YES" else "YES"

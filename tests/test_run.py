@@ -146,3 +146,27 @@ def test_cli_run_and_export(tmp_path, capsys, monkeypatch):
     assert "not a run directory" in capsys.readouterr().err
     assert main(["run", "--out", str(tmp_path / "bad"), "--space", "nope", "--pipeline-factory", FACTORY]) == 2
     assert "no spaces rig named 'nope'" in capsys.readouterr().err
+
+
+def test_render_and_sut_errors_are_recorded_not_counted_as_failures_and_the_run_goes_on(tmp_path, monkeypatch):
+    monkeypatch.setenv("ISU_TEST_FAIL_RENDER_WITH_CAN", "1")
+    monkeypatch.setenv("ISU_TEST_SUT_ERROR_WITH_BOTTLE", "1")
+    summary = run_search(config(tmp_path / "run", budget_tests=18))
+    records = records_of(tmp_path / "run").values()
+    render_errors = [r for r in records if r.render_error]
+    sut_errors = [r for r in records if r.sut_error]
+    assert summary.tests == 18 and render_errors and sut_errors
+    assert all(r.canonical["can"] == "YES" and r.image is None and not r.failed for r in render_errors)
+    assert all(r.canonical["cola_bottle"] == "YES" and not r.failed and "502" in r.sut_raw for r in sut_errors)
+    assert summary.errors == len(render_errors) + len(sut_errors)
+    assert summary.failures == sum(r.failed for r in records) > 0
+    out = io.StringIO()
+    write_csv(tmp_path / "run", out)
+    rows = list(csv.DictReader(io.StringIO(out.getvalue())))
+    assert {r["test_id"] for r in rows if r["render_error"]} == {r.test_id for r in render_errors}
+
+
+def test_an_unusable_sut_stops_the_run_with_a_clear_error(tmp_path, capsys):
+    assert main(["run", "--out", str(tmp_path / "r"), "--sut", "command:/no/such/program", "--budget", "2",
+                 "--pop-size", "2", "--no-report"]) == 2
+    assert "not found" in capsys.readouterr().err
