@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import os
 import sys
@@ -60,9 +59,9 @@ def config_from_args(args) -> RunConfig:
         stored = json.loads((args.out / "run.json").read_text())["config"]
         stored_pipeline = stored.pop("pipeline")
         pipeline = PipelineConfig(**{**stored_pipeline, "run_dir": str(args.out),
-                                     "channels": tuple(stored_pipeline["channels"])})
+                                     "channels": tuple(stored_pipeline["channels"]),
+                                     "render_threads": render_threads(args.workers)})
         stored.update(workers=args.workers, cluster=args.cluster)
-        pipeline = dataclasses.replace(pipeline, render_threads=render_threads(args.workers))
         if args.budget is not None:
             stored["budget_tests"] = args.budget
         if args.budget_time is not None:

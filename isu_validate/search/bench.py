@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import tempfile
 import time
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -33,7 +34,8 @@ def register_bench(sub) -> None:
 def synthetic_fitness(space, scene: dict) -> float:
     """A cheap stand-in for a SUT: deterministic, depends on several features."""
     canonical = space.canonical(scene)
-    return 1.0 - 0.1 * sum(hash(f"{k}={v}") % 3 == 0 for k, v in canonical.items()) / max(1, len(canonical))
+    # crc32, not hash(): string hashes change per process, and the bench must repeat exactly
+    return 1.0 - 0.1 * sum(zlib.crc32(f"{k}={v}".encode()) % 3 == 0 for k, v in canonical.items()) / max(1, len(canonical))
 
 
 def measure(space_name: str, algorithm: str, pop_size: int, seed: int, sizes: list[int], folder: Path) -> list[dict]:
