@@ -18,11 +18,13 @@ from .cabin import cabin_hash, load_cabin
 from .cache import RenderCache
 from .camera import CameraRig, load_camera, pinhole_plan
 from .outputs import channel_paths, parse_channels, write_outputs
+from .people import People, PeopleStore
+from .people.store import PEOPLE_VERSION
 from .presets import Preset, get_preset
 from .worker import BlenderWorker, WorkerCrashed, WorkerFailed, WorkerTimeout
 
 # bump when the scene content or the outputs change: it is part of every cache key
-RENDERER_VERSION = "isu-blender-1"
+RENDERER_VERSION = "isu-blender-2"
 
 # what the worker shows for a feature the scene space does not have (or that is inactive)
 DEFAULTS = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height": "H2", "driver_weight": "W2",
@@ -35,7 +37,8 @@ DEFAULTS = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height
 class BlenderRenderer:
     def __init__(self, preset: str | Preset = "draft", camera: str | os.PathLike | CameraRig = "default",
                  cabin: str | os.PathLike | dict = "default", channels=(), cache_dir=None, log_dir=None,
-                 timeout_s: float = 240.0, space: SceneSpace | str | None = None, threads: int = 0):
+                 timeout_s: float = 240.0, space: SceneSpace | str | None = None, threads: int = 0,
+                 people_cache: str | os.PathLike | None = None):
         self.preset = get_preset(preset, threads=threads) if isinstance(preset, str) else preset
         self.rig = camera if isinstance(camera, CameraRig) else load_camera(camera)
         self.render_rig = self.rig.scaled(self.preset.scale)
@@ -51,8 +54,9 @@ class BlenderRenderer:
         self._owner = os.getpid()
         self._count = 0
         self.unrendered = sorted(set(self.space.names) - set(DEFAULTS))
+        self.people = People(self.cabin, PeopleStore(people_cache) if people_cache else None)
         self._identity = hashlib.sha256(json.dumps(
-            [RENDERER_VERSION, self.render_rig.hash, cabin_hash(self.cabin), self.preset.to_worker(),
+            [RENDERER_VERSION, PEOPLE_VERSION, self.render_rig.hash, cabin_hash(self.cabin), self.preset.to_worker(),
              self.preset.scale, self.channels], sort_keys=True).encode()).hexdigest()
 
     # ------------------------------------------------------------------ protocol
@@ -140,13 +144,17 @@ class BlenderRenderer:
         raise RenderError(f"render failed twice (worker restarted in between): {last}")
 
     def _render_once(self, features: dict, out: Path, extras: dict, tag: str):
+        t_people = time.perf_counter()
+        people = self.people.for_scene(features, with_driver=not extras.get("hide_driver"))
+        people_s = time.perf_counter() - t_people
         worker = self._ensure_worker()
         self._count += 1
         exr = self._tmp / f"frame-{self._count}.exr"
         camera = {**self.plan.blender_camera(), "position": list(self.render_rig.position),
                   "rotation": [list(r) for r in self.render_rig.rotation]}
         reply = worker.request({"op": "render", "features": features, "camera": camera, "extras": extras,
-                                "preset": self.preset.to_worker(), "exr": str(exr), "tag": tag}, self.timeout_s)
+                                "people": people, "preset": self.preset.to_worker(), "exr": str(exr), "tag": tag},
+                               self.timeout_s)
         t = time.perf_counter()
         try:
             paths, visible = write_outputs(exr, self.plan, out, self.channels)
@@ -154,7 +162,7 @@ class BlenderRenderer:
             raise RenderError(f"could not write the render of this scene to {out}: {exc}") from exc
         finally:
             exr.unlink(missing_ok=True)
-        timings = {"update_s": reply["update_s"], "render_s": reply["render_s"],
+        timings = {"people_s": people_s, "update_s": reply["update_s"], "render_s": reply["render_s"],
                    "write_s": reply["save_s"] + time.perf_counter() - t, "worker_cpu_s": reply["cpu_s"]}
         return paths, visible, timings
 
