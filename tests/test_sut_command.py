@@ -201,3 +201,8 @@ def test_sut_check_reports_errors_and_bad_input(program, image, capsys, monkeypa
     assert main(["sut", "check", "--sut", "reference", "--sut-option", f"model_dir={empty}", str(image)]) == 2
     assert "no trained reference ISU" in capsys.readouterr().err
     assert main(["sut", "check", "--sut", program, str(image.parent / "nope.png")]) == 2
+    assert "nope.png does not exist" in capsys.readouterr().err
+    assert main(["sut", "check", "--sut", program, str(image.parent)]) == 2
+    err = capsys.readouterr().err
+    assert f"{image.parent} is a folder; sut check asks about one image" in err and "does not exist" not in err
+    assert f"e.g. {image}" in err
