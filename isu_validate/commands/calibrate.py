@@ -79,6 +79,10 @@ def _calibrate(args) -> int:
 
     detections, skipped = detect_images(paths, spec, progress)
     print(file=sys.stderr)
+    for path, why in skipped:  # the user must see which shots did not count, not only the camera file
+        print(f"skipped {path}: {why}", file=sys.stderr)
+    if skipped:
+        print(f"used {len(detections)} of {len(paths)} images", file=sys.stderr)
     name = args.name or Path(args.out).stem
     res = calibrate(detections, args.model, board=spec, name=name, working_distance_m=args.working_distance,
                     skipped=skipped, cross_validate=not args.no_cross_validation, outlier_sigma=args.outlier_sigma)
