@@ -110,7 +110,9 @@ def test_a_wrong_board_spec_is_a_clear_error(shots, tmp_path, capsys):
 def test_bench_calib_prints_speed_against_error(capsys):
     assert main(["bench", "calib", "--frames", "8", "--noise", "0.5", "--model", "pinhole"]) == 0
     out = capsys.readouterr().out
-    row = out.splitlines()[2].split()
+    header, row = out.splitlines()[1].split(), out.splitlines()[2].split()
+    assert len(set(header)) == len(header) == len(row)  # each column named once, in full
+    assert {"truth_diff_median_px", "truth_diff_inf_median_px", "cv_median_px"} <= set(header)
     assert row[0] == "8" and float(row[1]) == 0.5
     assert all(np.isfinite(float(v)) for v in row[2:])
 
