@@ -126,6 +126,12 @@ def test_process_pool_and_dask_give_the_same_run_as_one_process(tmp_path):
         # the worker (in this process) keeps no pipeline, and no renderer, of the finished run
         assert not [key for key in pipeline_module._PIPELINES if str(tmp_path / "dask") in key]
         assert len(doubles.CLOSED) > closed_before
+        # a setting only the pipeline can check is checked on a worker, before anything is written
+        bad = RunConfig(pipeline=PipelineConfig(run_dir=str(tmp_path / "bad"), factory="tests.doubles:nothing"),
+                        cluster=cluster.scheduler_address)
+        with pytest.raises(ValueError, match="cannot load the pipeline factory"):
+            run_search(bad)
+        assert not (tmp_path / "bad").exists()
     keys = [{t: r.scene_key for t, r in records_of(tmp_path / name).items()} for name in ("serial", "pool", "dask")]
     assert keys[0] == keys[1] == keys[2]
     assert serial.population == pooled.population == dasked.population
@@ -217,16 +223,19 @@ def test_a_broken_sut_stops_the_run_with_its_last_error_and_resume_continues_aft
     assert all(after[t].created == r.created for t, r in kept.items())  # kept, not evaluated again
 
 
-def test_a_closed_port_stops_the_run(tmp_path, capsys):
+@pytest.mark.parametrize("workers", ["1", "2"])
+def test_a_closed_port_stops_the_run(tmp_path, capsys, workers):
     import socket
 
     with socket.socket() as s:  # a port that was free a moment ago: nothing listens there
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
     assert _run_cli(tmp_path / "r", "--sut", f"http:http://127.0.0.1:{port}/isu", "--sut-option", "max_retries=0",
-                    "--stop-after-sut-errors", "3") == 1
+                    "--stop-after-sut-errors", "3", "--workers", workers) == 1
     assert "last SUT error: cannot reach" in capsys.readouterr().err
-    assert len(records_of(tmp_path / "r")) == 3
+    kept = len(records_of(tmp_path / "r"))
+    # one process stops right at the third; a pool also keeps what was already running
+    assert kept == 3 if workers == "1" else 3 <= kept <= 6
 
 
 def test_sut_errors_between_answers_do_not_stop_the_run(tmp_path, monkeypatch):
