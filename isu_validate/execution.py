@@ -100,6 +100,8 @@ class DaskExecutor:
         # each worker keeps one pipeline (and its Blender process) per run configuration: end ours
         try:
             self.client.run(close_pipeline, self.config)
+        except Exception:  # noqa: BLE001 - a lost worker or scheduler has nothing left to close;
+            pass           # an error here must not hide the one that ended the run
         finally:
             self.client.close()
 
