@@ -1,4 +1,4 @@
-"""``command:PROGRAM ARGS...``: the command protocol of ARCHITECTURE.md.
+"""``command:PROGRAM ARGS...``: the command protocol of docs/ARCHITECTURE.md.
 
 The program receives one JSON object on stdin,
 ``{"mode": "vqa", "image": PATH, "prompt": TEXT, "questions": [{"key", "question", "options"}]}``
