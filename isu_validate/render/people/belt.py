@@ -2,10 +2,10 @@
 shoulder, diagonally across the chest to the buckle by the right hip, and a lap strap from the buckle
 across the pelvis to the outboard anchor.
 
-Each strap starts as straight lines through a few waypoints on the body and relaxes like a taut
-string: it is smoothed towards straight lines and pushed back out to rest just on the surface
-(never inside it), repeatedly. Only the torso, pelvis and thighs carry it (an arm raised past the
-strap does not lift it off the chest)."""
+Each strap starts as the straight line between its ends (through the body), is pressed onto the side
+of the body it crosses, and relaxes like a taut string: pulled straight, lifted back to rest just on
+the surface (never inside it), repeatedly. Only the torso, pelvis and thighs carry it (an arm raised
+past the strap does not lift it off the chest)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -34,40 +34,42 @@ def carrier_mask(model) -> np.ndarray:
 
 
 def lay_belt(posed: Posed, faces: np.ndarray, carriers: np.ndarray, hardware: dict) -> tuple[Strap, Strap]:
-    surface = Surface(posed.vertices, faces, carriers)
     anchor, buckle, lap_anchor = (np.asarray(hardware[k], float) for k in ("upper_anchor", "buckle", "lap_anchor"))
-    neck = posed.head("neck01")
-    left, right = posed.head("upperarm01.L"), posed.head("upperarm01.R")
-    hip_l, hip_r = posed.head("upperleg01.L"), posed.head("upperleg01.R")
-    forward = np.array([1.0, 0.0, 0.0])
-    # over the collarbone between neck and shoulder, the middle of the chest, in front of the right hip
-    shoulder = neck + 0.45 * (left - neck) + np.array([0.0, 0.0, 0.08])
-    chest = (neck + hip_r) / 2 + np.array([0.0, 0.04, 0.0]) + forward * 0.25
-    hip = hip_r + forward * 0.2 + np.array([0.0, 0.04, 0.06])
-    diagonal = _relax(surface, [anchor, shoulder, chest, hip, buckle], 48)
-    lap = _relax(surface, [buckle, hip_r + forward * 0.25 + np.array([0, 0, 0.05]),
-                           hip_l + forward * 0.25 + np.array([0, 0, 0.05]), lap_anchor], 40)
+    body = Surface(posed.vertices, faces, carriers)
+    # a strap is pressed onto the side of the body it crosses: the diagonal from the front and above
+    # (chest and shoulder), the lap strap from the front and above (belly and thighs)
+    diagonal = _relax(body, anchor, buckle, 48, pressed_from=(1.0, 0.0, 0.5))
+    lap = _relax(body, buckle, lap_anchor, 40, pressed_from=(1.0, 0.0, 1.0))
     return diagonal, lap
 
 
-def _relax(surface: Surface, waypoints: list, n: int, rounds: int = 30) -> Strap:
-    """A taut strap through the end points, resting on the surface between them."""
-    ends = waypoints[0], waypoints[-1]
-    points = _resample(np.array(waypoints, float), n)
-    normals = np.zeros_like(points)
+def _relax(surface: Surface, start, end, n: int, pressed_from, rounds: int = 20) -> Strap:
+    """A taut strap from ``start`` to ``end`` resting on the surface: the straight line between them
+    (through the body) is pressed onto the body from the ``pressed_from`` side (each point moved to
+    where a ray from that side first meets the body), then tightened (each point pulled towards its
+    neighbours) and lifted back out of the body, repeatedly, until it settles."""
+    points = start + (end - start) * np.linspace(0.0, 1.0, n)[:, None]
+    side = np.asarray(pressed_from, float) / np.linalg.norm(pressed_from)
+    hit, normal, found = surface.cast(points[1:-1] + side * 1.0, -side)
+    inner = points[1:-1]
+    pressed = found & ((hit - inner) @ side > 0)        # only points inside the body (behind the hit)
+    inner[pressed] = hit[pressed] + normal[pressed] * REST
     for _ in range(rounds):
-        inner = points[1:-1]
-        # tension: each point moves to the middle of its neighbours (a string pulls itself straight)
-        points[1:-1] = 0.5 * inner + 0.25 * (points[:-2] + points[2:])
-        q, nrm, d = surface.closest(points[1:-1])
-        low = d < REST
-        points[1:-1][low] = q[low] + nrm[low] * REST
-        normals[1:-1] = nrm
         points = _resample(points, n)
-        points[0], points[-1] = ends
-    q, nrm, d = surface.closest(points)
-    normals = _smooth_normals(nrm, points)
-    return Strap(points.astype(np.float32), normals.astype(np.float32))
+        points[1:-1] = 0.5 * points[1:-1] + 0.25 * (points[:-2] + points[2:])
+        _lift(surface, points)
+    nrm = _lift(surface, points)
+    normals = np.concatenate([nrm[:1], nrm, nrm[-1:]])
+    return Strap(points.astype(np.float32), _smooth_normals(normals, points).astype(np.float32))
+
+
+def _lift(surface: Surface, points: np.ndarray) -> np.ndarray:
+    """Lift the strap's inner points that sink below their rest height back onto the surface; returns
+    the surface normals under them."""
+    q, nrm, d = surface.closest(points[1:-1])
+    low = d < REST
+    points[1:-1][low] = q[low] + nrm[low] * REST
+    return nrm
 
 
 def _resample(points: np.ndarray, n: int) -> np.ndarray:
@@ -85,6 +87,6 @@ def _smooth_normals(normals: np.ndarray, points: np.ndarray) -> np.ndarray:
     for _ in range(4):
         out[1:-1] = 0.5 * out[1:-1] + 0.25 * (out[:-2] + out[2:])
     tangent = np.gradient(points, axis=0)
-    tangent /= np.linalg.norm(tangent, axis=1, keepdims=True)
+    tangent /= np.maximum(np.linalg.norm(tangent, axis=1, keepdims=True), 1e-12)
     out -= tangent * (out * tangent).sum(axis=1, keepdims=True)
     return out / np.maximum(np.linalg.norm(out, axis=1, keepdims=True), 1e-9)

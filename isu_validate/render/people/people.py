@@ -140,6 +140,8 @@ def _topology(kind: str) -> dict:
             "head": regions.head_mask(model, faces), "slot_names": np.array(regions.SLOTS),
             **{f"field_{k}": v.astype(np.float32) for k, v in fields.items()}, "field_scalp": style.field,
             "lips_mask": np.array(str(regions.lips_mask_path())),
+            "hands": regions.bone_weights(model, ("wrist", "finger", "metacarpal")) > 0.5,
+            "carriers": belt.carrier_mask(model),
             "hair_scalp": style.scalp.astype(np.int32), "hair_faces": style.faces, "hair_thickness": style.thickness}
 
 

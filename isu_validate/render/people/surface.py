@@ -26,5 +26,21 @@ class Surface:
         sign = np.where(((points - q) * n).sum(axis=1) >= 0, 1.0, -1.0)
         return q, n, d * sign
 
+    def cast(self, origins: np.ndarray, direction) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(first hits, normals there, hit?) of rays from ``origins`` along one ``direction``."""
+        origins = np.asarray(origins, np.float64)
+        direction = np.asarray(direction, float) / np.linalg.norm(direction)
+        hits = np.full_like(origins, np.nan)
+        normals = np.zeros_like(origins)
+        locations, rays, tris = self.mesh.ray.intersects_location(
+            origins, np.repeat(direction[None], len(origins), axis=0), multiple_hits=True)
+        if len(rays):
+            depth = (locations - origins[rays]) @ direction
+            for ray in np.unique(rays):     # the nearest hit of each ray
+                mine = np.flatnonzero(rays == ray)
+                k = mine[np.argmin(depth[mine])]
+                hits[ray], normals[ray] = locations[k], self.mesh.face_normals[tris[k]]
+        return hits, normals, ~np.isnan(hits[:, 0])
+
     def distance(self, points: np.ndarray) -> np.ndarray:
         return self.closest(points)[2]
