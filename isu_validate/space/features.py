@@ -27,6 +27,8 @@ class Feature:
     options: tuple[str, ...] = ()
     truth_map: Mapping[str, str] = field(default_factory=dict)
     caption: str = ""
+    # plain-language text per value for a lab technician who recreates a scene (e.g. H1 -> "1.50-1.60 m")
+    describe: Mapping[str, str] = field(default_factory=dict)
 
     @property
     def discrete(self) -> bool:
@@ -92,7 +94,7 @@ class Feature:
 
 
 _KNOWN_KEYS = {"type", "values", "low", "high", "unit", "active_when", "predicted", "weight",
-               "question", "options", "truth", "caption", "description"}
+               "question", "options", "truth", "caption", "description", "describe"}
 
 
 def parse_feature(name: str, raw: Mapping[str, Any], where: str) -> Feature:
@@ -126,9 +128,24 @@ def parse_feature(name: str, raw: Mapping[str, Any], where: str) -> Feature:
         kwargs.update(low=low, high=high)
     if "active_when" in raw:
         kwargs["active_when"] = parse_condition(raw["active_when"], f"{here} active_when")
+    if "describe" in raw:
+        kwargs["describe"] = _parse_describe(raw["describe"], kwargs.get("values", ()), here)
     if raw.get("predicted", False):
         kwargs.update(_parse_prediction(raw, kwargs, here))
     return Feature(**kwargs)
+
+
+def _parse_describe(raw, values: tuple, here: str) -> dict[str, str]:
+    """``describe = { VALUE = "text for a technician", ... }``: texts for values the feature takes."""
+    if not isinstance(raw, Mapping) or not values:
+        raise SpaceError(f"{here}: `describe` must be a table of texts per value of a categorical or ordinal "
+                         f"feature, e.g. describe = {{ H1 = \"1.50-1.60 m tall\" }}")
+    unknown = [k for k in raw if k not in values]
+    if unknown:
+        raise SpaceError(f"{here}: `describe` names values {unknown} the feature never takes (its values: {list(values)})")
+    if not all(isinstance(v, str) and v.strip() for v in raw.values()):
+        raise SpaceError(f"{here}: every `describe` entry must be a non-empty text")
+    return {str(k): v.strip() for k, v in raw.items()}
 
 
 def _parse_prediction(raw: Mapping[str, Any], kwargs: dict, here: str) -> dict:

@@ -20,6 +20,7 @@ from .skeleton import Body
 from .store import PeopleStore, entry_key
 
 KINDS = ("male", "female", "child")
+JOINTS = ("root", "spine01", "neck01", "head")    # bone heads a state keeps (for measuring a pose)
 HAIR_STYLE = {"male": "short", "female": "bob", "child": "short"}
 
 
@@ -79,7 +80,7 @@ class People:
                 _load_npz(self.topology(kind))
             body = Body(load_model(), driver_phenotype(gender, height, weight), expressions.facial_actions(emotion))
             posed = body.evaluate(_deltas_from(pose))
-            state = {**_surface_state(posed.vertices, topo), **{k: pose[k] for k in pose if not k.startswith("d_")}}
+            state = {**_surface_state(posed, topo), **{k: pose[k] for k in pose if not k.startswith("d_")}}
             return self.store.put("driver", key, state)
 
     def child_state(self, front_facing: bool):
@@ -92,7 +93,7 @@ class People:
             body = Body(load_model(), child_phenotype("FRONT_FACING" if front_facing else "REAR_FACING"),
                         expressions.facial_actions("NEUTRAL"))
             posed = child.pose_child(body, front_facing, self.cabin["anchors"]["child_seat"])
-            return self.store.put("child", key, _surface_state(posed.vertices, topo))
+            return self.store.put("child", key, _surface_state(posed, topo))
 
     def _driver_pose(self, gender, height, weight, phone_position) -> dict:
         """The expression-free pose (bone deltas), belt straps and phone placement of a driver."""
@@ -145,10 +146,13 @@ def _topology(kind: str) -> dict:
             "hair_scalp": style.scalp.astype(np.int32), "hair_faces": style.faces, "hair_thickness": style.thickness}
 
 
-def _surface_state(vertices: np.ndarray, topo: dict) -> dict:
+def _surface_state(posed, topo: dict) -> dict:
+    """What the worker swaps in: the body's vertices and its hair shell; and a few joints (JOINTS)."""
+    vertices = posed.vertices
     normals = hair.vertex_normals(vertices.astype(np.float64), topo["faces"])
     style = hair.HairStyle("", topo["hair_scalp"], topo["hair_faces"], topo["hair_thickness"], topo["field_scalp"])
-    return {"vertices": vertices.astype(np.float32), "hair": hair.hair_vertices(style, vertices, normals)}
+    return {"vertices": vertices.astype(np.float32), "hair": hair.hair_vertices(style, vertices, normals),
+            "joints": np.array([posed.head(b) for b in JOINTS], np.float32)}
 
 
 def _deltas_from(record: dict) -> dict:
