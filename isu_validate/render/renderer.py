@@ -55,6 +55,7 @@ class BlenderRenderer:
         self._count = 0
         self.unrendered = sorted(set(self.space.names) - set(DEFAULTS))
         self.people = People(self.cabin, PeopleStore(people_cache) if people_cache else None)
+        self.show_people = True     # False renders the cabin without driver and child (bench render's people cost)
         self._identity = hashlib.sha256(json.dumps(
             [RENDERER_VERSION, PEOPLE_VERSION, self.render_rig.hash, cabin_hash(self.cabin), self.preset.to_worker(),
              self.preset.scale, self.channels], sort_keys=True).encode()).hexdigest()
@@ -106,7 +107,8 @@ class BlenderRenderer:
         return RenderResult(Path(out), paths, timings)
 
     def cache_key(self, canonical: Mapping[str, Any]) -> str:
-        return hashlib.sha256(f"{self._identity}:{self.space.key(canonical)}".encode()).hexdigest()
+        people = "" if self.show_people else ":without-people"
+        return hashlib.sha256(f"{self._identity}{people}:{self.space.key(canonical)}".encode()).hexdigest()
 
     @property
     def worker_pid(self) -> int | None:
@@ -145,7 +147,8 @@ class BlenderRenderer:
 
     def _render_once(self, features: dict, out: Path, extras: dict, tag: str):
         t_people = time.perf_counter()
-        people = self.people.for_scene(features, with_driver=not extras.get("hide_driver"))
+        people = self.people.for_scene(features, with_driver=not extras.get("hide_driver")) if self.show_people \
+            else {"driver": None, "child": None}
         people_s = time.perf_counter() - t_people
         worker = self._ensure_worker()
         self._count += 1

@@ -118,11 +118,15 @@ def _track_shift(rest: Posed, rig: dict) -> float:
 
 
 # ---------------------------------------------------------------------- torso, legs, seat
+SLUMP_DEG = 10.0   # the upper back rounds forward this much over three vertebrae
+
+
 def _torso(recline: float) -> dict:
-    """Spine and neck: a slight slump of the upper back, the head brought back upright to look ahead."""
-    d = {"spine03": rot_x(4.0), "spine02": rot_x(4.0), "spine01": rot_x(2.0),
-         "neck01": rot_x(0.45 * (recline - 10.0) + 3.0), "neck02": rot_x(0.3 * (recline - 10.0) + 2.0),
-         "head": rot_x(0.25 * (recline - 10.0) + 2.0)}
+    """Spine and neck: a slight slump of the upper back, the neck bringing the head back level, eyes
+    on the road (the rest of the recline taken out over neck and head)."""
+    level = recline - SLUMP_DEG
+    d = {"spine03": rot_x(0.4 * SLUMP_DEG), "spine02": rot_x(0.4 * SLUMP_DEG), "spine01": rot_x(0.2 * SLUMP_DEG),
+         "neck01": rot_x(0.5 * level), "neck02": rot_x(0.3 * level), "head": rot_x(0.2 * level)}
     return {bone: rigid(R) for bone, R in d.items()}
 
 
