@@ -19,7 +19,7 @@ from .cache import RenderCache
 from .camera import CameraRig, load_camera, pinhole_plan
 from .outputs import channel_paths, parse_channels, write_outputs
 from .people import People, PeopleStore
-from .people.store import PEOPLE_VERSION
+from .people.store import code_version as people_version
 from .presets import Preset, get_preset
 from .worker import BlenderWorker, WorkerCrashed, WorkerFailed, WorkerTimeout
 
@@ -57,7 +57,7 @@ class BlenderRenderer:
         self.people = People(self.cabin, PeopleStore(people_cache) if people_cache else None)
         self.show_people = True     # False renders the cabin without driver and child (bench render's people cost)
         self._identity = hashlib.sha256(json.dumps(
-            [RENDERER_VERSION, PEOPLE_VERSION, self.render_rig.hash, cabin_hash(self.cabin), self.preset.to_worker(),
+            [RENDERER_VERSION, people_version(), self.render_rig.hash, cabin_hash(self.cabin), self.preset.to_worker(),
              self.preset.scale, self.channels], sort_keys=True).encode()).hexdigest()
 
     # ------------------------------------------------------------------ protocol

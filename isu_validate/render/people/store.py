@@ -1,9 +1,10 @@
 """The on-disk cache of people: topologies (triangles, UVs, material regions, head split, hair) and
 posed states (vertices in the cabin, hair, belt straps, the phone in the hand), as .npz files.
 
-An entry's key hashes everything that decides its content: this module's PEOPLE_VERSION, anny's
-version, the parts of the cabin rig the pose depends on, and the inputs (gender, classes,
-expression, phone position...). Entries are written to a temporary file and renamed into place, so
+An entry's key hashes everything that decides its content: the code that made it (PEOPLE_VERSION and
+the source of this package, so a changed pose or region never comes back from an old cache), anny's
+version, the parts of the cabin rig the pose depends on, and the inputs (gender, classes, expression,
+phone position...). Entries are written to a temporary file and renamed into place, so
 the processes of a pool can share the folder. It lives beside anny's model cache (``ANNY_CACHE_DIR``,
 default ``<sys.prefix>/share/anny``) in ``isu-validate-people/``; ``ISU_PEOPLE_CACHE`` moves it."""
 from __future__ import annotations
@@ -12,6 +13,7 @@ import hashlib
 import json
 import os
 import tempfile
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -26,8 +28,17 @@ def people_cache_dir() -> Path:
     return Path(os.environ.get("ISU_PEOPLE_CACHE") or anny_cache_dir() / "isu-validate-people")
 
 
+@lru_cache(maxsize=1)
+def code_version() -> str:
+    """PEOPLE_VERSION and a hash of this package's source files."""
+    digest = hashlib.sha256(PEOPLE_VERSION.encode())
+    for path in sorted(Path(__file__).parent.glob("*.py")):
+        digest.update(path.read_bytes())
+    return f"{PEOPLE_VERSION}-{digest.hexdigest()[:12]}"
+
+
 def entry_key(kind: str, inputs: dict) -> str:
-    content = {"version": PEOPLE_VERSION, "anny": anny_version(), "kind": kind, **inputs}
+    content = {"version": code_version(), "anny": anny_version(), "kind": kind, **inputs}
     return hashlib.sha256(json.dumps(content, sort_keys=True, default=str).encode()).hexdigest()
 
 
