@@ -27,6 +27,12 @@ class Feature:
     options: tuple[str, ...] = ()
     truth_map: Mapping[str, str] = field(default_factory=dict)
     caption: str = ""
+    label: str = ""               # a short display name for people ("phone on the co-driver seat")
+    describe: Mapping[str, str] = field(default_factory=dict)  # value -> plain text for a lab technician
+
+    @property
+    def display_name(self) -> str:
+        return self.label or self.name.replace("_", " ")
 
     @property
     def discrete(self) -> bool:
@@ -92,7 +98,7 @@ class Feature:
 
 
 _KNOWN_KEYS = {"type", "values", "low", "high", "unit", "active_when", "predicted", "weight",
-               "question", "options", "truth", "caption", "description"}
+               "question", "options", "truth", "caption", "description", "label", "describe"}
 
 
 def parse_feature(name: str, raw: Mapping[str, Any], where: str) -> Feature:
@@ -124,11 +130,27 @@ def parse_feature(name: str, raw: Mapping[str, Any], where: str) -> Feature:
         if kind == "integer" and (low != int(low) or high != int(high)):
             raise SpaceError(f"{here}: integer bounds must be whole numbers")
         kwargs.update(low=low, high=high)
+    kwargs.update(_parse_texts(raw, kwargs, here))
     if "active_when" in raw:
         kwargs["active_when"] = parse_condition(raw["active_when"], f"{here} active_when")
     if raw.get("predicted", False):
         kwargs.update(_parse_prediction(raw, kwargs, here))
     return Feature(**kwargs)
+
+
+def _parse_texts(raw: Mapping[str, Any], kwargs: dict, here: str) -> dict:
+    """``label`` and ``describe`` are for people (recreation sheets, reports): they never change the hash."""
+    label = raw.get("label", "")
+    if not isinstance(label, str):
+        raise SpaceError(f"{here}: `label` must be a string, got {label!r}")
+    describe = raw.get("describe", {})
+    if not isinstance(describe, Mapping) or not all(isinstance(v, str) for v in describe.values()):
+        raise SpaceError(f"{here}: `describe` must be a table of value = \"text\", got {describe!r}")
+    unknown = [k for k in describe if kwargs.get("values") and k not in kwargs["values"]]
+    if unknown:
+        raise SpaceError(f"{here}: `describe` names {unknown}, which are not values of the feature "
+                         f"(its values: {list(kwargs['values'])})")
+    return {"label": label.strip(), "describe": {str(k): v.strip() for k, v in describe.items()}}
 
 
 def _parse_prediction(raw: Mapping[str, Any], kwargs: dict, here: str) -> dict:
