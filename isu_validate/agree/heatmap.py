@@ -16,7 +16,9 @@ def heatmap(rows: list[dict], column: str, labels: dict[str, str], title: str) -
     from matplotlib.patches import Patch
 
     columns = list(dict.fromkeys((r["sample"], r["frame"]) for r in rows))
-    features = list(dict.fromkeys(r["feature"] for r in rows))
+    present = set(r["feature"] for r in rows)
+    # the space's order (``labels`` follows it), as the paper's K1..K12; then anything else
+    features = [f for f in labels if f in present] + sorted(present - set(labels))
     several = len(columns) > len({s for s, _ in columns})
     grid = np.full((len(features), len(columns)), np.nan)
     for r in rows:
