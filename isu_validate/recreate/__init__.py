@@ -82,7 +82,8 @@ def _cabin(name_or_path) -> dict:
     return load_cabin(name_or_path)
 
 
-def _camera_file(run: Run, candidate: Candidate) -> Path | None:
+def _camera_file(run: Run) -> Path | None:
+    """The camera rig file the run rendered with (a shipped name or a path)."""
     from ..paths import resolve_rig
     try:
         return resolve_rig("cameras", run.pipeline.get("camera", "default"))
@@ -95,7 +96,7 @@ def _write(pairs: PairsDir, space: SceneSpace, model: EffortModel, cabin: dict, 
     width = max(2, len(str(len(ordered))))
     sheets, previous = [], None
     for k, cand in enumerate(ordered, 1):
-        camera = _camera_file(cand.run, cand)
+        camera = _camera_file(cand.run)
         if camera is None:
             plan.notes.append(f"{cand.run.name}: the camera rig {cand.run.pipeline.get('camera')!r} is gone; "
                               "samples have no camera.toml")
