@@ -75,17 +75,18 @@ def test_change_costs_count_a_group_once_and_respect_tolerance():
 def test_effort_files_are_checked(tmp_path):
     space = load_space()
     bad = tmp_path / "bad.toml"
-    bad.write_text('[groups.a]\nfeatures = ["can"]\nminutes = 1\n[groups.b]\nfeatures = ["can"]\nminutes = 2\n')
+    bad.write_text('[groups.a]\nfeatures = ["seat_belt"]\nminutes = 1\n[groups.b]\nfeatures = ["seat_belt"]\nminutes = 2\n')
     with pytest.raises(EffortError, match="another group"):
         load_effort(bad, space)
-    bad.write_text('[groups.a]\nfeatures = ["can"]\nminutes = -1\n')
+    bad.write_text('[groups.a]\nfeatures = ["seat_belt"]\nminutes = -1\n')
     with pytest.raises(EffortError, match="minutes >= 0"):
         load_effort(bad, space)
     ok = tmp_path / "ok.toml"
-    ok.write_text('default = 2\n[groups.a]\nfeatures = ["can", "no_such_feature"]\nminutes = 1\n')
+    ok.write_text('default = 2\n[groups.a]\nfeatures = ["seat_belt", "no_such_feature"]\nminutes = 1\n')
     model = load_effort(ok, space)
     assert model.unused == ["no_such_feature"]
-    assert {g.name: g.minutes for g in model.groups}["seat_belt"] == 2.0
+    minutes = {g.name: g.minutes for g in model.groups}
+    assert minutes["a"] == 1.0 and minutes["tshirt_colour"] == 2.0
 
 
 SPACE = {"name": "words", "features": {

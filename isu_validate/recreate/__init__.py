@@ -107,9 +107,11 @@ def _write(pairs: PairsDir, space: SceneSpace, model: EffortModel, cabin: dict, 
                          [g.note or g.name for g in changed] if previous is not None else [],
                          model.step(previous, scene))
         items = checklist(space, scene, cabin)
+        camera_text, camera_xy = _camera(sample)
         sample.sheet.write_text(page(f"{sample.name} recreation sheet",
-                                     sheet_html(sample, items, cabin, info, "sim.png", _camera_text(sample))))
-        sheets.append(sheet_html(sample, items, cabin, info, relative(sample.sim, pairs.root), _camera_text(sample)))
+                                     sheet_html(sample, items, cabin, info, "sim.png", camera_text, camera_xy)))
+        sheets.append(sheet_html(sample, items, cabin, info, relative(sample.sim, pairs.root), camera_text,
+                                 camera_xy))
         plan.samples.append({"sample": sample.name, "position": k, "run": str(cand.run.path),
                              "test_id": cand.record.test_id, "failed": cand.failed,
                              "fitness": cand.record.primary, "source": info.source,
@@ -123,14 +125,15 @@ def _write(pairs: PairsDir, space: SceneSpace, model: EffortModel, cabin: dict, 
                                                 + "".join(sheets)))
 
 
-def _camera_text(sample: Sample) -> str:
+def _camera(sample: Sample) -> tuple[str, tuple[float, float] | None]:
+    """Where the camera is, in words and on the sketch (from the sample's camera.toml)."""
     if not sample.camera.is_file():
-        return "no camera file"
+        return "no camera file", None
     from ..render.camera import CameraRigError, load_camera
     try:
         rig = load_camera(sample.camera)
     except (CameraRigError, ValueError) as exc:
-        return f"camera.toml unreadable ({exc})"
+        return f"camera.toml unreadable ({exc})", None
     x, y, z = rig.position
     return (f"{rig.name} ({rig.width}x{rig.height}) at x = {x:+.2f} m, y = {y:+.2f} m, z = {z:.2f} m, "
-            "as in camera.toml")
+            "as in camera.toml"), (x, y)

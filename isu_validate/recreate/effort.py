@@ -102,10 +102,10 @@ def load_effort(name_or_path: str | os.PathLike, space: SceneSpace) -> EffortMod
         seen |= set(names)
         unused += [f for f in names if f not in space.features]
         present = tuple(f for f in names if f in space.features)
+        group = ChangeGroup(name, present, _minutes(spec.get("minutes"), f"{here} `minutes`"),
+                            _minutes(spec.get("tolerance", 0.0), f"{here} `tolerance`"), str(spec.get("note", "")))
         if present:
-            groups.append(ChangeGroup(name, present, _minutes(spec.get("minutes"), f"{here} `minutes`"),
-                                      _minutes(spec.get("tolerance", 0.0), f"{here} `tolerance`"),
-                                      str(spec.get("note", ""))))
+            groups.append(group)
     for feature in space.names:
         if feature not in seen:
             groups.append(ChangeGroup(feature, (feature,), default, note=space.features[feature].display_name))

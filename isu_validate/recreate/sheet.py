@@ -76,7 +76,7 @@ def crop_uri(sample: Sample, parts: tuple[str, ...]) -> str | None:
 
 
 def sheet_html(sample: Sample, items: list[Item], cabin: dict, info: SheetInfo, image_href: str,
-               camera_text: str) -> str:
+               camera_text: str, camera_xy: tuple[float, float] | None = None) -> str:
     """One sheet as an HTML fragment (``<section class="sheet">``)."""
     rows = []
     for item in items:
@@ -93,7 +93,7 @@ def sheet_html(sample: Sample, items: list[Item], cabin: dict, info: SheetInfo, 
     changes = ", ".join(info.changes) if info.changes else "nothing but the capture"
     lead = ("first scene: set up everything below" if info.position == 1
             else f"change from the previous sheet: {changes}")
-    sketch = top_view(cabin, items)
+    sketch = top_view(cabin, items, camera_xy)
     return (
         f'<section class="sheet" id="{esc(sample.name)}"><h1>{esc(sample.name)} · recreation sheet '
         f"{info.position} of {info.total}</h1>"

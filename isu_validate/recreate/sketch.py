@@ -10,8 +10,8 @@ SCALE = 120.0   # SVG units per metre
 PAD = 14.0
 
 
-def top_view(cabin: dict, items: list[Item]) -> str:
-    """The sketch, or "" when nothing in the scene has a measured point."""
+def top_view(cabin: dict, items: list[Item], camera: tuple[float, float] | None = None) -> str:
+    """The sketch, or "" when nothing in the scene has a measured point; ``camera``: its (x, y)."""
     placed = [i for i in items if i.placement and i.placement.point]
     if not placed:
         return ""
@@ -37,6 +37,10 @@ def top_view(cabin: dict, items: list[Item]) -> str:
                      f'y2="{v:.1f}" stroke="#555" stroke-width="5" stroke-linecap="round"/>')
     for n, item in enumerate(placed, 1):
         parts.append(_thing(item, n, uv))
+    if camera is not None:
+        cu, cv = uv(*camera)
+        parts.append(f'<rect x="{cu - 6:.1f}" y="{cv - 4:.1f}" width="12" height="8" fill="#c62828"/>'
+                     f'<text x="{cu + 8:.1f}" y="{cv + 3:.1f}" font-size="10" fill="#c62828">camera</text>')
     u0, v0 = uv(0.0, 0.0)
     parts.append(f'<circle cx="{u0:.1f}" cy="{v0:.1f}" r="3" fill="#000"/>'
                  f'<text x="{u0 + 5:.1f}" y="{v0 - 4:.1f}" font-size="10">origin</text>'
