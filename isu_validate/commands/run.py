@@ -7,7 +7,9 @@ import os
 import sys
 from pathlib import Path
 
-from ..pipeline import PipelineConfig
+from ..pipeline import PipelineConfig, check_render_settings
+from ..render.visibility import DEFAULT_MIN_VISIBLE, parse_min_visible
+from ..space import load_space
 from .sut import parse_options
 from ..search import ALGORITHMS, RunConfig, RunError, run_search
 
@@ -42,6 +44,12 @@ def add_run_options(p) -> None:
     p.add_argument("--repeats", type=int, default=1, help="ask each scene K times, majority vote")
     p.add_argument("--preset", default="draft", help="render preset: draft | standard | final")
     p.add_argument("--camera", default="default", help="camera rig: shipped name or TOML path")
+    p.add_argument("--extrinsics-from", metavar="RIG",
+                   help="take the camera's pose in the cabin from this registered rig (for a calibrated camera "
+                        "file whose pose was never registered); recorded in run.json")
+    p.add_argument("--min-visible", action="append", default=[], metavar="SHARE|FEATURE=SHARE",
+                   help="a feature whose parts are seen less than this share is occluded: not judged, counted "
+                        f"apart (default: the space's min_visible, else {DEFAULT_MIN_VISIBLE}); repeatable")
     p.add_argument("--cabin", default="default", help="cabin rig: shipped name or TOML path")
     p.add_argument("--channels", default="", help="extra render channels, e.g. seg,depth")
     p.add_argument("--sut-timeout", type=float, default=60.0, help="seconds per SUT request")
@@ -75,6 +83,7 @@ def config_from_args(args) -> RunConfig:
         prompt=args.prompt, repeats=args.repeats, preset=args.preset, camera=args.camera, cabin=args.cabin,
         channels=tuple(c for c in args.channels.split(",") if c), sut_timeout_s=args.sut_timeout,
         sut_options=parse_options(args.sut_option), render_threads=render_threads(args.workers),
+        extrinsics_from=args.extrinsics_from, min_visible=parse_min_visible(args.min_visible),
         factory=args.pipeline_factory)
     return RunConfig(pipeline=pipeline, algorithm=args.algorithm, pop_size=args.pop_size, seed=args.seed,
                      budget_tests=budget_tests, budget_s=args.budget_time, workers=args.workers,
@@ -88,6 +97,8 @@ def render_threads(workers: int) -> int:
 
 def cmd_run(args) -> int:
     config = config_from_args(args)
+    # an unregistered camera or a bad threshold stops here, before the run directory is written
+    check_render_settings(config.pipeline, load_space(config.pipeline.space))
     try:
         summary = run_search(config, resume=args.resume)
     except RunError as exc:
