@@ -1,6 +1,7 @@
 """The Blender renderer behind the ``Renderer`` protocol: validates a scene, looks it up in the cache,
-asks the warm worker for the passes, writes the outputs, and survives a worker crash or hang (one
-restart and retry, then RenderError)."""
+asks the warm worker for the passes and the parts' unoccluded footprints, writes the outputs and the
+label (per-feature visibility, frame checks), and survives a worker crash or hang (one restart and
+retry, then RenderError)."""
 from __future__ import annotations
 
 import hashlib
@@ -62,35 +63,43 @@ class BlenderRenderer:
 
     # ------------------------------------------------------------------ protocol
     def render(self, scene: Mapping[str, Any], out: Path) -> RenderResult:
-        """Render a valid scene to ``out`` (PNG). An invalid scene raises SpaceError (a ValueError)
-        naming the problem before Blender sees it; a failed render raises RenderError."""
+        """Render a valid scene to ``out`` (PNG) with its label: what each feature's parts show
+        (``visibility``, ``occluded``). An invalid scene raises SpaceError (a ValueError) naming the
+        problem before Blender sees it; a failed render, or a frame that cannot show the scene (black,
+        saturated, no driver: written, then refused), raises RenderError."""
         t0 = time.perf_counter()
         out = Path(out)
         canonical = self.space.check(scene)
         key = self.cache_key(canonical)
-        where = channel_paths(out)
-        hit = self.cache.get(key, out, where) if self.cache else None
-        if hit:
-            paths, visible, parts = hit["channels"], hit["meta"]["visible"], hit["meta"]["parts"]
-            timings = {"update_s": 0.0, "render_s": 0.0, "write_s": time.perf_counter() - t0}
-        else:
-            paths, visible, footprints, timings = self._render_with_retry({**DEFAULTS, **canonical}, out, {},
-                                                                          tag=key[:12], parts=self.parts)
-            parts = part_shares(visible, footprints)
+        paths, visible, parts, timings, cached = self._frame(canonical, key, out)
         timings["total_s"] = time.perf_counter() - t0
-        if self.cache and not hit:
-            self.cache.put(key, out, paths, {"scene": canonical, "visible": visible, "parts": parts,
-                                             "timings": timings})
         shares, occluded = feature_visibility(self.space, canonical, parts, self.min_visible)
         frame = frame_stats(out)
         problem = frame_problem(frame, visible)
-        self._write_label(where["label"], canonical, key, bool(hit), timings, {
+        label = channel_paths(out)["label"]
+        self._write_label(label, canonical, key, cached, timings, {
             "visible": visible, "parts": parts, "frame": frame, "frame_problem": problem,
             "visibility": shares, "occluded": occluded, "min_visible": self.min_visible})
         if problem:
             raise RenderError(f"unusable frame: {problem}", image=out)
-        return RenderResult(out, {**paths, "label": where["label"]}, timings, cached=bool(hit),
-                            visibility=shares, occluded=occluded)
+        return RenderResult(out, {**paths, "label": label}, timings, cached=cached, visibility=shares,
+                            occluded=occluded)
+
+    def _frame(self, canonical: dict, key: str, out: Path):
+        """(files by channel, visible instances, part shares, timings, cached): from the cache when it
+        holds the scene, else rendered and put there."""
+        t0 = time.perf_counter()
+        hit = self.cache.get(key, out, channel_paths(out)) if self.cache else None
+        if hit:
+            timings = {"update_s": 0.0, "render_s": 0.0, "write_s": time.perf_counter() - t0}
+            return hit["channels"], hit["meta"]["visible"], hit["meta"]["parts"], timings, True
+        paths, visible, footprints, timings = self._render_with_retry({**DEFAULTS, **canonical}, out, {},
+                                                                      tag=key[:12], parts=self.parts)
+        parts = part_shares(visible, footprints)
+        if self.cache:
+            self.cache.put(key, out, paths, {"scene": canonical, "visible": visible, "parts": parts,
+                                             "timings": timings})
+        return paths, visible, parts, timings, False
 
     def close(self) -> None:
         if self._worker is not None and os.getpid() == self._owner:
