@@ -1,4 +1,4 @@
-"""The tests table of a run as CSV (ARCHITECTURE.md contract), one row per evaluated test.
+"""The tests table of a run as CSV (a contract, docs/ARCHITECTURE.md), one row per evaluated test.
 
 Beyond the contract: ``visible.<feature>`` is the visible share of each feature that names render
 parts (empty where the scene has nothing of it to see), and ``occluded`` lists the features the frame
