@@ -199,6 +199,9 @@ def test_render_and_run_refuse_it_before_writing_anything(unregistered, tmp_path
     assert main([*args, "--extrinsics-from", "default", "--min-visible", "luggage=0.4"]) == 0
     pipeline = json.loads((out / "run.json").read_text())["config"]["pipeline"]
     assert pipeline["extrinsics_from"] == "default" and pipeline["min_visible"] == {"luggage": 0.4}
+    capsys.readouterr()
+    assert main(["run", "--out", str(out), "--resume", "--min-visible", "luggage=0.5"]) == 2   # measures otherwise
+    assert "--min-visible luggage: 0.4 in the stored run, 0.5 now" in capsys.readouterr().err
 
 
 # ------------------------------------------------------------------ a whole run with occlusion (doubles)

@@ -143,11 +143,19 @@ def _mismatch_message(exc: ResumeMismatch) -> str:
     """The differences in the words the user typed (--seed, not seed)."""
     flags = {(f"pipeline.{field}" if part == "pipeline" else field): "--" + dest.replace("_", "-")
              for dest, (part, field) in SETTINGS.items()}
-    listed = "\n".join(f"  {flags.get(d.setting, d.setting)}: {_shown(d.stored)} in the stored run, "
+    listed = "\n".join(f"  {_flag(d.setting, flags)}: {_shown(d.stored)} in the stored run, "
                        f"{_shown(d.now)} now" for d in exc.differences)
     return (f"{exc.run_dir} holds a run started with other settings:\n{listed}\n"
             "leave these options out to resume it as it was started (or give the stored values), "
             "or start a new run with another --out")
+
+
+def _flag(setting: str, flags: dict) -> str:
+    """--seed for "seed"; an entry of a dict-valued option by its key ("--min-visible luggage")."""
+    if setting in flags:
+        return flags[setting]
+    head, _, key = setting.rpartition(".")
+    return f"{flags[head]} {key}" if head in flags else setting
 
 
 def _shown(value) -> str:
