@@ -151,12 +151,3 @@ def test_a_scene_file_holding_a_list_is_a_clear_error_not_a_traceback(tmp_path, 
     assert "not a list; write one scene per file" in capsys.readouterr().err
     assert not (tmp_path / "x.png").exists()
 
-
-def test_describe_gives_technician_texts_for_values_only():
-    feature = {"type": "ordinal", "values": ["H1", "H2"], "describe": {"H1": "1.50-1.60 m tall"}}
-    space = space_from_dict({"features": {"driver_height": feature}})
-    assert space.features["driver_height"].describe == {"H1": "1.50-1.60 m tall"}
-    with pytest.raises(SpaceError, match="H9"):
-        space_from_dict({"features": {"driver_height": {**feature, "describe": {"H9": "giant"}}}})
-    with pytest.raises(SpaceError, match="non-empty text"):
-        space_from_dict({"features": {"driver_height": {**feature, "describe": {"H1": ""}}}})

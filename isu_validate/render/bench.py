@@ -86,7 +86,7 @@ def _bench_preset(preset, scenes, refs, args, space, people: bool = True) -> dic
 
     from . import open_renderer
     times, psnr, ssim = [], [], []
-    parts = {"people_s": [], "update_s": [], "render_s": [], "write_s": [], "worker_cpu_s": []}
+    parts = {"people_s": [], "update_s": [], "render_s": [], "write_s": [], "worker_cpu_s": [], "footprint_s": []}
     with open_renderer(preset, args.rig, log_dir=args.out / "logs") as r:
         r.show_people = people
         tag = "" if people else "-nopeople"
@@ -142,7 +142,8 @@ def _print_row(row: dict) -> None:
           f"PSNR {row['psnr_db']:.1f} dB  SSIM {row['ssim']:.4f}  "
           + (f"SUT unchanged {row['sut_unchanged']:.1%}  " if row.get("sut_unchanged") is not None else "") +
           f"[update {row['median_parts_s']['update_s']:.3f} render {row['median_parts_s']['render_s']:.2f} "
-          f"write {row['median_parts_s']['write_s']:.2f}; worker CPU {row['median_parts_s']['worker_cpu_s']:.2f} s]",
+          f"write {row['median_parts_s']['write_s']:.2f}; worker CPU {row['median_parts_s']['worker_cpu_s']:.2f} s; "
+          f"footprints {1000 * row['median_parts_s']['footprint_s']:.0f} ms]",
           flush=True)
     bare = row.get("without_people")
     if bare:
