@@ -117,7 +117,7 @@ def test_regions_dress_the_body_and_split_off_the_head(people, model):
     # hair: a shell on the scalp; the women's reaches lower than the men's
     female = _load(people.topology("female"))
     rest = people_module.Body(model, people_module.driver_phenotype("MALE", "H3", "W2")).evaluate({})
-    assert rest.vertices[female["hair_scalp"], 2].min() < rest.vertices[topology["hair_scalp"], 2].min() - 0.05
+    assert rest.vertices[female["hair_i"], 2].min() < rest.vertices[topology["hair_i"], 2].min() - 0.05
 
 
 def test_children_sit_in_their_seats_the_rear_facing_one_reclined(people):

@@ -14,7 +14,7 @@ from mathutils import Vector
 from ..labels import INSTANCE_ID
 from . import mesh as M
 
-SKIN = (0.50, 0.30, 0.21)
+SKIN = (0.38, 0.21, 0.14)   # linear RGB: a medium skin tone, apart from a white T-shirt in bright light
 SHIRT = {"BLACK": (0.012, 0.012, 0.013), "WHITE": (0.80, 0.80, 0.78)}
 HAIR = (0.030, 0.016, 0.009)
 BELT = (0.10, 0.10, 0.11)
@@ -86,10 +86,10 @@ class Person:
             self.parts[part] = self._object(f"{self.name}_{part}", mesh, pid)
             self.maps[part] = used
         hair_mat = self._material("hair")
-        mesh = _mesh(f"{self.name}_hair", len(topo["hair_scalp"]), topo["hair_faces"],
+        mesh = _mesh(f"{self.name}_hair", len(topo["hair_i"]), topo["hair_faces"],
                      np.zeros(len(topo["hair_faces"]), np.uint8), [hair_mat], None)
         self.parts["hair"] = self._object(f"{self.name}_hair", mesh, self.head_id)
-        self.maps["hair"] = topo["hair_scalp"]
+        self.maps["hair"] = topo["hair_i"]    # only its length counts: the hair's vertices come whole
 
     def _object(self, name, mesh, pid):
         obj = bpy.data.objects.new(name, mesh)

@@ -143,14 +143,16 @@ def _topology(kind: str) -> dict:
             "lips_mask": np.array(str(regions.lips_mask_path())),
             "hands": regions.bone_weights(model, ("wrist", "finger", "metacarpal")) > 0.5,
             "carriers": belt.carrier_mask(model),
-            "hair_scalp": style.scalp.astype(np.int32), "hair_faces": style.faces, "hair_thickness": style.thickness}
+            "hair_i": style.i, "hair_j": style.j, "hair_t": style.t, "hair_faces": style.faces,
+            "hair_thickness": style.thickness}
 
 
 def _surface_state(posed, topo: dict) -> dict:
     """What the worker swaps in: the body's vertices and its hair shell; and a few joints (JOINTS)."""
     vertices = posed.vertices
     normals = hair.vertex_normals(vertices.astype(np.float64), topo["faces"])
-    style = hair.HairStyle("", topo["hair_scalp"], topo["hair_faces"], topo["hair_thickness"], topo["field_scalp"])
+    style = hair.HairStyle("", topo["hair_i"], topo["hair_j"], topo["hair_t"], topo["hair_faces"],
+                           topo["hair_thickness"], topo["field_scalp"])
     return {"vertices": vertices.astype(np.float32), "hair": hair.hair_vertices(style, vertices, normals),
             "joints": np.array([posed.head(b) for b in JOINTS], np.float32)}
 
