@@ -45,11 +45,15 @@ def load_model():
     """The anny model (float32, all 52 facial actions, torch skinning), built once per process."""
     with _lock:
         import torch
-        from anny.paths import set_anny_cache_path
+        try:
+            from anny.paths import set_anny_cache_path
+            import anny
+        except ImportError as exc:
+            raise RuntimeError(f"the anny body model cannot be imported ({exc}); run `make setup`, or "
+                               "pip install --no-deps anny==0.6.2 and pip install roma trimesh rtree") from exc
         set_anny_cache_path(anny_cache_dir())
-        import anny
         with warnings.catch_warnings():
-            # without the optional NVIDIA Warp anny falls back to torch skinning: same vertices (FACTS)
+            # without the optional NVIDIA Warp anny falls back to torch skinning (same vertices, to 2e-7 m)
             warnings.filterwarnings("ignore", message=".*Warp.*")
             model = anny.Anny(facial_actions=FACIAL_ACTIONS).to(dtype=torch.float32)
         model.eval()

@@ -39,7 +39,8 @@ class People:
         self.cabin, self.store = cabin, store or PeopleStore()
         self.driver_rig = rig_part_hash(cabin, _DRIVER_RIG)
         self.child_rig = rig_part_hash(cabin, _CHILD_RIG)
-        self.misses = 0
+        self.misses = 0           # entries posed by this process (each a miss of the store)
+        self.last_miss_s = 0.0
 
     # ------------------------------------------------------------------ what the worker gets
     def for_scene(self, f: dict, with_driver: bool = True) -> dict:
@@ -76,8 +77,7 @@ class People:
         with _timed(self):
             pose = self._driver_pose(gender, height, weight, phone_position)
             kind = "female" if gender == "FEMALE" else "male"
-            topo = self.store.load("topology", entry_key("topology", {"person": kind})) or \
-                _load_npz(self.topology(kind))
+            topo = _load_npz(self.topology(kind))
             body = Body(load_model(), driver_phenotype(gender, height, weight), expressions.facial_actions(emotion))
             posed = body.evaluate(_deltas_from(pose))
             state = {**_surface_state(posed, topo), **{k: pose[k] for k in pose if not k.startswith("d_")}}

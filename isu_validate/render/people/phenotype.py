@@ -19,7 +19,7 @@ BMI_TARGET = {"W1": 19.0, "W2": 23.0, "W3": 27.5, "W4": 32.0}
 WEIGHT_WORDS = {"W1": "slim", "W2": "average build", "W3": "overweight", "W4": "obese"}
 GENDER = {"MALE": 0.0, "FEMALE": 1.0}
 ADULT_AGE = 0.792          # anny's age input for 35 years (MorphologicalAgeMapping)
-# children (MorphologicalAgeMapping): 1 year -> 0.05 (0.78 m, 7.3 kg), 2.5 years -> 0.1325 (about 0.93 m)
+# children (anny.shape_distribution.MorphologicalAgeMapping): 1 year -> 0.05 (0.78 m, 7.3 kg), 2.5 years -> 0.1325 (0.93 m)
 CHILD_AGE = {"REAR_FACING": 0.05, "FRONT_FACING": 0.1325}
 PROPORTIONS = 0.5
 
