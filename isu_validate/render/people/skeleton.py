@@ -1,6 +1,6 @@
 """One anny body evaluated in a pose: vertices, bone heads and each bone's world rotation delta.
 
-anny's "local-ref" pose parameters (FACTS): the root's 4x4 is its world pose; every other bone's
+anny's "local-ref" pose parameters (anny.utils.kinematics): the root's 4x4 is its world pose; every other bone's
 delta D is a rotation in the world-aligned axes of the reference (rest) pose, applied after its
 parent's, so a bone's world rotation delta is G = G_parent @ D. Posing by "rotate this bone by Q in the
 world, on top of what its parent does" is then D = G_parent^T Q G_parent (``delta_for``)."""
