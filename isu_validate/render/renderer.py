@@ -80,7 +80,7 @@ class BlenderRenderer:
         timings["total_s"] = time.perf_counter() - t0
         shares, occluded = feature_visibility(self.space, canonical, parts, self.min_visible)
         frame = frame_stats(out)
-        problem = frame_problem(frame, visible)
+        problem = frame_problem(frame, visible, driver_expected=self.show_people)
         label = channel_paths(out)["label"]
         self._write_label(label, canonical, key, cached, timings, {
             "visible": visible, "parts": parts, "frame": frame, "frame_problem": problem,
