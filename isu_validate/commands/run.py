@@ -41,7 +41,9 @@ def add_run_options(p) -> None:
     p.add_argument("--prompt", help="override the prompt sent to the SUT")
     p.add_argument("--repeats", type=int, default=1, help="ask each scene K times, majority vote")
     p.add_argument("--preset", default="draft", help="render preset: draft | standard | final")
-    p.add_argument("--camera", default="default", help="camera rig: shipped name or TOML path")
+    p.add_argument("--camera", default="default", help="camera rig: shipped name or TOML path (with an imaging "
+                                                       "model from `isu-validate exposure`, renders are developed "
+                                                       "the way that camera would)")
     p.add_argument("--cabin", default="default", help="cabin rig: shipped name or TOML path")
     p.add_argument("--channels", default="", help="extra render channels, e.g. seg,depth")
     p.add_argument("--sut-timeout", type=float, default=60.0, help="seconds per SUT request")

@@ -12,12 +12,14 @@ import time
 from pathlib import Path
 from typing import Any, Mapping
 
+from capture.camera_model.apply import apply as apply_imaging
+
 from ..protocols import RenderError, RenderResult
 from ..space import SceneSpace, load_space
 from .cabin import cabin_hash, load_cabin
 from .cache import RenderCache
 from .camera import CameraRig, load_camera, pinhole_plan
-from .outputs import channel_paths, parse_channels, write_outputs
+from .outputs import channel_paths, parse_channels, srgb_encode, write_outputs
 from .presets import Preset, get_preset
 from .worker import BlenderWorker, WorkerCrashed, WorkerFailed, WorkerTimeout
 
@@ -51,9 +53,12 @@ class BlenderRenderer:
         self._owner = os.getpid()
         self._count = 0
         self.unrendered = sorted(set(self.space.names) - set(DEFAULTS))
-        self._identity = hashlib.sha256(json.dumps(
-            [RENDERER_VERSION, self.render_rig.hash, cabin_hash(self.cabin), self.preset.to_worker(),
-             self.preset.scale, self.channels], sort_keys=True).encode()).hexdigest()
+        self.imaging = self.rig.imaging       # the camera's imaging model; None = linear light as sRGB
+        identity = [RENDERER_VERSION, self.render_rig.hash, cabin_hash(self.cabin), self.preset.to_worker(),
+                    self.preset.scale, self.channels]
+        if self.imaging is not None:          # a camera without a model keeps its cache keys
+            identity.append(self.imaging.hash)
+        self._identity = hashlib.sha256(json.dumps(identity, sort_keys=True).encode()).hexdigest()
 
     # ------------------------------------------------------------------ protocol
     def render(self, scene: Mapping[str, Any], out: Path) -> RenderResult:
@@ -69,13 +74,17 @@ class BlenderRenderer:
             if hit:
                 timings = {"update_s": 0.0, "render_s": 0.0, "write_s": time.perf_counter() - t0}
                 timings["total_s"] = time.perf_counter() - t0
-                self._write_label(where["label"], canonical, hit["meta"].get("visible", {}), timings, key, True)
+                self._write_label(where["label"], canonical, hit["meta"].get("visible", {}), timings, key, True,
+                                  hit["meta"].get("exposure"))
                 return RenderResult(out, {**hit["channels"], "label": where["label"]}, timings, cached=True)
-        paths, visible, timings = self._render_with_retry({**DEFAULTS, **canonical}, out, {}, tag=key[:12])
+        developed: dict = {}
+        paths, visible, timings = self._render_with_retry({**DEFAULTS, **canonical}, out, {}, tag=key[:12],
+                                                          developed=developed)
         timings["total_s"] = time.perf_counter() - t0
         if self.cache:
-            self.cache.put(key, out, paths, {"scene": canonical, "visible": visible, "timings": timings})
-        self._write_label(where["label"], canonical, visible, timings, key, False)
+            self.cache.put(key, out, paths, {"scene": canonical, "visible": visible, "timings": timings,
+                                             "exposure": developed.get("exposure")})
+        self._write_label(where["label"], canonical, visible, timings, key, False, developed.get("exposure"))
         return RenderResult(out, {**paths, "label": where["label"]}, timings, cached=False)
 
     def close(self) -> None:
@@ -125,11 +134,11 @@ class BlenderRenderer:
                 raise RenderError(f"could not start the Blender worker: {exc}") from exc
         return self._worker
 
-    def _render_with_retry(self, features: dict, out: Path, extras: dict, tag: str):
+    def _render_with_retry(self, features: dict, out: Path, extras: dict, tag: str, developed: dict | None = None):
         last = None
         for attempt in (1, 2):
             try:
-                return self._render_once(features, out, extras, tag)
+                return self._render_once(features, out, extras, tag, developed)
             except (WorkerCrashed, WorkerTimeout) as exc:   # restart and retry once
                 last = exc
                 if self._worker is not None:
@@ -139,7 +148,7 @@ class BlenderRenderer:
                 raise RenderError(f"Blender failed on this scene: {exc} (log: {self.log_path})") from exc
         raise RenderError(f"render failed twice (worker restarted in between): {last}")
 
-    def _render_once(self, features: dict, out: Path, extras: dict, tag: str):
+    def _render_once(self, features: dict, out: Path, extras: dict, tag: str, developed: dict | None = None):
         worker = self._ensure_worker()
         self._count += 1
         exr = self._tmp / f"frame-{self._count}.exr"
@@ -149,7 +158,8 @@ class BlenderRenderer:
                                 "preset": self.preset.to_worker(), "exr": str(exr), "tag": tag}, self.timeout_s)
         t = time.perf_counter()
         try:
-            paths, visible = write_outputs(exr, self.plan, out, self.channels)
+            paths, visible = write_outputs(exr, self.plan, out, self.channels,
+                                           self._developer(tag, {} if developed is None else developed))
         except (OSError, KeyError, ValueError) as exc:   # unreadable passes or an unwritable output
             raise RenderError(f"could not write the render of this scene to {out}: {exc}") from exc
         finally:
@@ -158,11 +168,26 @@ class BlenderRenderer:
                    "write_s": reply["save_s"] + time.perf_counter() - t, "worker_cpu_s": reply["cpu_s"]}
         return paths, visible, timings
 
-    def _write_label(self, path: Path, canonical: dict, visible: dict, timings: dict, key: str, cached: bool):
+    def _developer(self, tag: str, developed: dict):
+        """The post-render step: linear light through the camera's imaging model (or plain sRGB).
+        Its noise is seeded by the scene's cache key, so a scene renders to the same frame every time."""
+        if self.imaging is None:
+            return srgb_encode
+
+        def develop(rgb):
+            image, exposure = apply_imaging(rgb, self.imaging, seed=int(hashlib.sha256(tag.encode()).hexdigest()[:8], 16))
+            developed["exposure"] = exposure.to_dict() if exposure is not None else None
+            return image
+        return develop
+
+    def _write_label(self, path: Path, canonical: dict, visible: dict, timings: dict, key: str, cached: bool,
+                     exposure: dict | None = None):
         label = {"scene": canonical, "space": self.space.name, "preset": self.preset.name,
                  "renderer": RENDERER_VERSION, "cache_key": key, "cached": cached,
                  "camera": self.render_rig.to_dict(), "camera_source": self.rig.source,
                  "cabin": self.cabin.get("source"), "visible": visible, "timings": timings}
+        if self.imaging is not None:
+            label["imaging"] = {"model": self.imaging.hash, "exposure": exposure}
         if self.unrendered:
             label["unrendered_features"] = self.unrendered
         path.write_text(json.dumps(label, indent=1))
