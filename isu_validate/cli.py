@@ -18,6 +18,7 @@ COMMAND_MODULES = [
     "stylize",    # stylize (gatys|fast), stylize train
     "capture",    # capture list|shoot (V4L2, DepthAI, replay)
     "calibrate",  # calibrate IMAGES..., calibrate diff|register
+    "exposure",   # exposure fit|apply|chart|colour|check (the camera's imaging model)
 ]
 
 

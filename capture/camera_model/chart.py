@@ -89,6 +89,8 @@ def _mcc(image_rgb8: np.ndarray) -> np.ndarray | None:
 def _ccd(image_rgb8: np.ndarray) -> np.ndarray | None:
     import colour_checker_detection as ccd
     h, w = image_rgb8.shape[:2]
+    if h > w:
+        return None                       # it turns portrait frames; their coordinates are not mapped back
     settings = ccd.SETTINGS_SEGMENTATION_COLORCHECKER_CLASSIC
     found = ccd.detect_colour_checkers_segmentation(image_rgb8.astype(np.float32) / 255.0, additional_data=True)
     if not found:
@@ -102,8 +104,6 @@ def _ccd(image_rgb8: np.ndarray) -> np.ndarray | None:
     for y0, y1, x0, x1 in np.asarray(data.swatch_masks)[:PATCHES]:
         corners = np.float32([[[x0, y0], [x1, y0], [x1, y1], [x0, y1]]])
         quads.append(cv2.perspectiveTransform(corners, to_working)[0] * scale)
-    if h > w:
-        return None                       # it turns portrait frames; their coordinates are not mapped back
     return np.asarray(quads, dtype=np.float64)
 
 
@@ -133,12 +133,14 @@ def sample(image01: np.ndarray, quads: np.ndarray) -> Patches:
     return Patches(colours, usable, dropped)
 
 
-def oriented(patches: Patches, linearise) -> Patches:
+def oriented(quads: np.ndarray, patches: Patches, linearise) -> tuple[np.ndarray, Patches]:
     """The chart may be found upside down (same outline): keep the patch order whose colours, brought
     to linear light, fit the reference best with one gain per channel."""
     flipped = Patches(patches.colours[::-1].copy(), patches.usable[::-1].copy(),
                       {PATCHES - 1 - i: why for i, why in patches.dropped.items()})
-    return min((patches, flipped), key=lambda p: _fit_error(linearise(p.colours), p.usable))
+    if _fit_error(linearise(flipped.colours), flipped.usable) < _fit_error(linearise(patches.colours), patches.usable):
+        return quads[::-1].copy(), flipped
+    return quads, patches
 
 
 def _fit_error(linear: np.ndarray, usable: np.ndarray) -> float:
