@@ -127,7 +127,7 @@ def _apply(rgb, matrix, method, options) -> np.ndarray:
 def _loo(source, target_lin, target_levels, method, options, to_output) -> float:
     """Mean dE2000 of each patch predicted by a correction fitted without it (inf when singular)."""
     n = len(source)
-    terms = _expanded(source[:1], method, options).shape[1]
+    terms = _expanded(source, method, options).shape[-1]
     if n - 1 < terms + 2:
         return float("inf")
     errors = []

@@ -94,3 +94,27 @@ def capture_set(model: ImagingModel, out: Path, seed: int = 0, light_levels=(0.0
             image, meta = shoot(model, still, seed * 1000 + 700 + int(gain) * 10 + r, manual=(1500.0, gain))
             paths["repeats"].append(write_frame(out / f"repeats-gain{gain:g}", f"frame_{r:04d}", image, meta))
     return paths
+
+
+def chart_scene(rng: np.random.Generator, size=(480, 640), corners=None, light: float = 1.0,
+                plain: bool = False) -> np.ndarray:
+    """A linear scene with a ColorChecker on it: ``corners`` (4x2 pixels, clockwise from the chart's top-left)
+    or a random placement (a quarter to half the frame wide, tilted, rotated a little); on a cabin-like
+    background, or a plain grey one."""
+    from .chart import chart_image
+    chart = chart_image()
+    h, w = size
+    if corners is None:
+        width = rng.uniform(0.25, 0.5) * w
+        cx, cy = rng.uniform(0.3, 0.7) * w, rng.uniform(0.35, 0.65) * h
+        angle = np.radians(rng.uniform(-12, 12))
+        half = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]]) * [width / 2, width / 3]
+        half = half * (1 + rng.uniform(-0.08, 0.08, (4, 1)))          # perspective: uneven corners
+        rot = np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
+        corners = half @ rot.T + [cx, cy]
+    ch, cw = chart.shape[:2]
+    hom = cv2.getPerspectiveTransform(np.float32([[0, 0], [cw, 0], [cw, ch], [0, ch]]), np.float32(corners))
+    warped = cv2.warpPerspective(chart, hom, (w, h), flags=cv2.INTER_AREA)
+    cover = cv2.warpPerspective(np.ones((ch, cw), np.float32), hom, (w, h), flags=cv2.INTER_AREA)[..., None]
+    background = np.full((h, w, 3), 0.25, np.float32) if plain else scene(rng, size) * 0.6
+    return ((background * (1 - cover) + warped) * light).astype(np.float32)
