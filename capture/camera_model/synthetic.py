@@ -9,7 +9,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from .apply import apply
+from .apply import apply  # noqa: F401 (re-exported for tests and the bench)
 from .model import CODES, AutoExposure, ColourCorrection, ImagingModel, Noise, Response
 
 
