@@ -11,8 +11,7 @@ One module per concept:
 - ``develop``: ``exposure apply`` on saved EXRs and runs; ``check``: ``exposure check``;
 - ``synthetic``: cameras with known parameters; ``bench``: ``bench exposure``.
 """
-from .apply import Exposure, apply
 from .model import AutoExposure, ColourCorrection, ImagingModel, ImagingModelError, Noise, Response
 
-__all__ = ["AutoExposure", "ColourCorrection", "Exposure", "ImagingModel", "ImagingModelError", "Noise", "Response",
-           "apply"]
+# the apply function lives in ``capture.camera_model.apply`` (not re-exported: it would hide that module)
+__all__ = ["AutoExposure", "ColourCorrection", "ImagingModel", "ImagingModelError", "Noise", "Response"]

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 from . import metering
@@ -33,17 +34,19 @@ class Exposure:
                 "iterations": self.iterations}
 
 
-def colour_correct(linear_rgb: np.ndarray, response: Response | None, colour: ColourCorrection | None) -> np.ndarray:
-    """Rendered linear RGB (H, W, 3) in the camera's linear RGB: white balance, then the correction."""
-    x = np.asarray(linear_rgb, dtype=np.float32)
-    if response is not None and response.white_balance != (1.0, 1.0, 1.0):
-        x = x * np.asarray(response.white_balance, dtype=np.float32)
-    if colour is None:
-        return x
-    if colour.is_linear:
-        return x @ colour.matrix.T.astype(np.float32)
+def colour_correct(linear_rgb: np.ndarray, response: Response | None, colour: ColourCorrection | None,
+                   scale: float = 1.0) -> np.ndarray:
+    """Rendered linear RGB (H, W, 3) in the camera's linear RGB: white balance, then the correction,
+    times ``scale`` (the exposure), as float32. A 3x3 correction with the white balance and the scale
+    folded in is one OpenCV transform (~0.5 ms for 640x480, ten times numpy's matmul)."""
+    x = np.ascontiguousarray(linear_rgb, dtype=np.float32)
+    wb = np.asarray(response.white_balance if response is not None else (1.0, 1.0, 1.0), dtype=np.float64)
+    if colour is None or colour.is_linear:
+        matrix = (colour.matrix if colour is not None else np.eye(3)) @ np.diag(wb) * scale
+        return cv2.transform(x, matrix.astype(np.float32))
     from colour.characterisation import apply_matrix_colour_correction   # lazy: colour imports in ~2-4 s
-    return apply_matrix_colour_correction(x, colour.matrix, colour.method, **colour.options).astype(np.float32)
+    out = apply_matrix_colour_correction(x * wb.astype(np.float32), colour.matrix, colour.method, **colour.options)
+    return (np.asarray(out, dtype=np.float32) * np.float32(scale))
 
 
 class ForwardCurve:
@@ -51,16 +54,24 @@ class ForwardCurve:
 
     def __init__(self, response: Response):
         grid = np.linspace(0.0, 1.0, _LUT_SIZE)
-        table = response.to_output(np.repeat(grid[:, None], 3, axis=1)).astype(np.float32)
-        self.tables = [np.ascontiguousarray(table[:, c]) for c in range(3)]
+        table = response.to_output(np.repeat(grid[:, None], 3, axis=1))
+        self.tables = [np.ascontiguousarray(table[:, c], dtype=np.float32) for c in range(3)]
+        self.codes = [np.ascontiguousarray(np.round(table[:, c] * 255.0), dtype=np.uint8) for c in range(3)]
+
+    def _gather(self, signal: np.ndarray, tables, dtype) -> np.ndarray:
+        idx = (signal * np.float32(_LUT_SIZE - 1) + np.float32(0.5)).astype(np.uint16)
+        out = np.empty(signal.shape, dtype=dtype)
+        for c in range(3):
+            np.take(tables[c], idx[..., c], out=out[..., c])
+        return out
 
     def __call__(self, signal: np.ndarray) -> np.ndarray:
-        """Output levels of signals (..., 3) already clipped to 0..1."""
-        idx = (signal * np.float32(_LUT_SIZE - 1) + np.float32(0.5)).astype(np.uint16)
-        out = np.empty(signal.shape, dtype=np.float32)
-        for c in range(3):
-            np.take(self.tables[c], idx[..., c], out=out[..., c])
-        return out
+        """Output levels (0..1, float32) of signals (..., 3) already clipped to 0..1."""
+        return self._gather(signal, self.tables, np.float32)
+
+    def to_codes(self, signal: np.ndarray) -> np.ndarray:
+        """8-bit output codes of signals (..., 3) already clipped to 0..1."""
+        return self._gather(signal, self.codes, np.uint8)
 
 
 _CURVES: dict[int, tuple[Response, ForwardCurve]] = {}
@@ -74,9 +85,10 @@ def forward_curve(response: Response) -> ForwardCurve:
     return _CURVES[key][1]
 
 
-def choose_exposure(camera_rgb: np.ndarray, ae: AutoExposure, curve: ForwardCurve) -> Exposure:
-    """Meter the frame as the camera would and choose exposure time and gain."""
-    step = metering.subsample_step(camera_rgb.shape[:2])
+def choose_exposure(camera_rgb: np.ndarray, ae: AutoExposure, curve: ForwardCurve, step: int | None = None) -> Exposure:
+    """Meter the frame as the camera would and choose exposure time and gain (``step``: the statistics grid's
+    pixel stride; None picks one for ~5000 samples, 1 when the frame given is already that grid)."""
+    step = step or metering.subsample_step(camera_rgb.shape[:2])
     sample = np.ascontiguousarray(camera_rgb[::step, ::step], dtype=np.float32)
     wts = metering.weights(sample.shape[:2], ae.metering, ae.centre_sigma, ae.roi)
 
@@ -153,20 +165,22 @@ def apply(linear_rgb: np.ndarray, model: ImagingModel, seed: int = 0,
     for the sensitivity). Without [exposure] the render's linear values are the sensor signal.
     Noise is seeded: the same render and seed give the same frame."""
     curve = forward_curve(model.curve)
-    x = colour_correct(linear_rgb, model.response, model.colour)
     ae, exposure = model.exposure, None
-    if ae is not None:
-        if manual is not None:
-            t, g = manual
-            exposure = Exposure(float(t), float(g), float("nan"), None, None, 0)
-        else:
-            exposure = choose_exposure(x, ae, curve)
-        signal = x * np.float32(exposure.exposure_us * 1e-6 * exposure.gain * ae.sensitivity)
-    else:
-        signal = x
+    if ae is not None and manual is not None:
+        exposure = Exposure(float(manual[0]), float(manual[1]), float("nan"), None, None, 0)
+    elif ae is not None:   # meter on the statistics grid before developing the whole frame
+        step = metering.subsample_step(linear_rgb.shape[:2])
+        exposure = choose_exposure(colour_correct(linear_rgb[::step, ::step], model.response, model.colour), ae,
+                                   curve, step=1)
+    scale = exposure.exposure_us * 1e-6 * exposure.gain * ae.sensitivity if exposure is not None else 1.0
+    signal = colour_correct(linear_rgb, model.response, model.colour, scale)
     gain = exposure.gain if exposure is not None else 1.0
     if model.noise is not None and (model.noise.shot or model.noise.read):
-        sigma = np.sqrt(model.noise.variance(signal, gain)).astype(np.float32)
-        signal = signal + sigma * standard_normal(signal.shape, seed)
-    out = curve(np.clip(signal, 0.0, 1.0))
-    return (out * 255.0 + 0.5).astype(np.uint8), exposure
+        sigma = np.maximum(signal, 0.0)                       # in place: each pass over 1M values counts
+        sigma *= np.float32(model.noise.shot * gain)
+        sigma += np.float32((model.noise.read * gain) ** 2)
+        np.sqrt(sigma, out=sigma)
+        sigma *= standard_normal(signal.shape, seed)
+        signal += sigma
+    np.clip(signal, 0.0, 1.0, out=signal)
+    return curve.to_codes(signal), exposure

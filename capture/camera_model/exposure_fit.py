@@ -144,7 +144,7 @@ def _speed(frames, metered, target, tolerance, default) -> tuple[float, dict]:
     for a, b in zip(order[:-1], order[1:]):
         fa, fb = frames[a], frames[b]
         err = np.log(target / max(metered[a], 1e-6))
-        if fa.group == fb.group and abs(err) > np.log1p(tolerance) and fb.product != fa.product:
+        if fa.order[0] == fb.order[0] and abs(err) > np.log1p(tolerance) and fb.product != fa.product:
             xs.append(err)
             ys.append(np.log(fb.product / fa.product))
     if len(xs) < 3:

@@ -25,14 +25,11 @@ class Frame:
     gain: float
     auto: bool
     order: tuple                 # (folder, sequence or timestamp or name): sorts a session in time
+    group: str = ""              # the folder named on the command line it came from (one scene, one bracket)
 
     @property
     def product(self) -> float:
         return self.exposure_us * self.gain
-
-    @property
-    def group(self) -> str:
-        return str(self.path.parent)
 
 
 @dataclass
@@ -52,15 +49,17 @@ class FrameSet:
         return [f"{path}: {why}; left out" for path, why in self.excluded.items()]
 
 
-def expand(inputs) -> list[Path]:
-    """Image files named directly or found in the folders named (sorted)."""
+def expand(inputs) -> list[tuple[Path, str]]:
+    """Image files named directly or found under the folders named (sorted), each with its group: the
+    folder named (a bracket shot as one session per exposure setting stays one bracket), or a file's folder."""
     paths = []
     for item in inputs:
         p = Path(item)
         if p.is_dir():
-            paths += sorted(q for q in p.rglob("*") if q.suffix.lower() in IMAGE_SUFFIXES and not q.name.startswith("."))
+            paths += [(q, str(p)) for q in sorted(p.rglob("*"))
+                      if q.suffix.lower() in IMAGE_SUFFIXES and not q.name.startswith(".")]
         elif p.exists():
-            paths.append(p)
+            paths.append((p, str(p.parent)))
         else:
             raise FileNotFoundError(f"frame {p} does not exist")
     if not paths:
@@ -70,8 +69,8 @@ def expand(inputs) -> list[Path]:
 
 def load(inputs) -> FrameSet:
     out = FrameSet()
-    for path in expand(inputs):
-        frame, why = _load_one(path)
+    for path, group in expand(inputs):
+        frame, why = _load_one(path, group)
         if frame is None:
             out.excluded[str(path)] = why
         else:
@@ -79,7 +78,7 @@ def load(inputs) -> FrameSet:
     return out
 
 
-def _load_one(path: Path) -> tuple[Frame | None, str]:
+def _load_one(path: Path, group: str) -> tuple[Frame | None, str]:
     sidecar = path.with_suffix(".json")
     if not sidecar.exists():
         return None, f"no sidecar {sidecar.name} (exposure time and ISO/gain unknown; shoot with `isu-validate capture shoot`)"
@@ -103,7 +102,7 @@ def _load_one(path: Path) -> tuple[Frame | None, str]:
     image = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB).astype(np.float32) / 255.0
     when = meta.get("sequence", meta.get("frame_index", meta.get("timestamp", path.name)))
     return Frame(path, image, float(exposure_us), gain, bool(meta.get("auto_exposure", False)),
-                 (str(path.parent), str(when).zfill(12) if isinstance(when, (int, float)) else str(when))), ""
+                 (str(path.parent), str(when).zfill(12) if isinstance(when, (int, float)) else str(when)), group), ""
 
 
 def _gain(meta: dict) -> float | None:

@@ -26,7 +26,7 @@ def repeat_groups(frames: list[Frame]) -> list[list[Frame]]:
     groups: dict[tuple, list[Frame]] = defaultdict(list)
     for f in frames:
         if not f.auto:
-            groups[(f.group, round(f.exposure_us, 3), round(f.gain, 4))].append(f)
+            groups[(str(f.path.parent), round(f.exposure_us, 3), round(f.gain, 4))].append(f)
     return [g for g in groups.values() if len(g) >= 2]
 
 

@@ -22,12 +22,13 @@ class UnderdeterminedError(ValueError):
 
 
 BRACKET_ADVICE = ("capture an exposure bracket: the same still scene in manual exposure at 3 or more exposure "
-                  "times with fixed gain, e.g. `isu-validate capture shoot --exposure-us 1000 --iso 100 ...` "
-                  "then 2000, 4000, 8000 us, each into the same folder")
+                  "times with fixed gain, e.g. `isu-validate capture shoot --exposure-us 1000 --iso 100 --frames 3 "
+                  "--out shots/bracket/1000` then 2000, 4000, 8000 us, and pass the folder shots/bracket")
 
 
 def bracket(frames: list[Frame]) -> list[Frame]:
-    """The largest set of manual frames of one session (folder) with distinct exposure products; frames
+    """The largest set of manual frames of one group (a folder named on the command line) with distinct
+    exposure products; frames
     taken at the same setting are averaged into one (sensor noise falls with the square root of their count)."""
     groups: dict[str, dict[float, list[Frame]]] = defaultdict(lambda: defaultdict(list))
     for f in frames:
