@@ -132,3 +132,20 @@ def test_corrupt_and_unreadable_frames_are_set_aside(captures, tmp_path):
     reasons = dict(data.excluded)
     assert "cannot be read" in reasons[str(folder / "frame_00_0.png")]
     assert "not valid JSON" in reasons[str(folder / "frame_00_1.png")]
+
+
+def test_renders_of_the_captured_scenes_fit_the_sensitivity(truth, tmp_path):
+    """Auto-exposed frames with linear renders of the same scenes (``--sim``) tie render light to the camera."""
+    from isu_validate.render.exr import write_exr
+    rng = np.random.default_rng(8)
+    for i, light in enumerate((0.02, 0.1, 0.5, 2.0)):
+        linear = synthetic.scene(rng, SIZE) * light
+        image, meta = synthetic.shoot(truth, linear, i)
+        synthetic.write_frame(tmp_path / "auto", f"frame_{i:04d}", image, meta)
+        (tmp_path / "sim").mkdir(exist_ok=True)
+        write_exr(tmp_path / "sim" / f"frame_{i:04d}.exr", {c: linear[..., k] for k, c in enumerate("RGB")})
+    result = fit_camera([tmp_path / "auto"], ImagingModel(response=truth.response), sim_dir=tmp_path / "sim")
+    ae = result.model.exposure
+    assert ae.sensitivity == pytest.approx(truth.exposure.sensitivity, rel=0.1)
+    assert ae.fit["sensitivity_from"].startswith("renders: 4 pairs")
+    assert not any("sensitivity assumed" in w for w in result.warnings)

@@ -48,9 +48,8 @@ def read_sim(spec: str | Path, detector: str = "auto") -> ChartReading:
         return ChartReading("reference", None, chart.Patches(srgb_encode(ref), np.ones(chart.PATCHES, bool)), ref)
     linear = None
     if str(spec).lower().endswith(".exr"):
-        from isu_validate.render.exr import read_exr
-        passes = read_exr(spec)
-        linear = np.dstack([next(v for k, v in passes.items() if k.endswith(c)) for c in "RGB"])
+        from .develop import read_linear
+        linear = read_linear(spec)
         image = (srgb_encode(linear) * 255.0 + 0.5).astype(np.uint8)
     else:
         image = read_rgb8(spec)

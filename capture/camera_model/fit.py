@@ -112,14 +112,13 @@ def _with_sensitivity(ae: AutoExposure, auto, response, base, sim_dir, warnings)
 
 
 def _sensitivity_from_renders(auto, response, sim_dir: Path) -> tuple[float, str]:
-    from isu_validate.render.exr import read_exr
+    from .develop import read_linear
     ratios, used = [], []
     for f in auto:
         exr = sim_dir / f"{f.path.stem}.exr"
         if not exr.exists():
             continue
-        passes = read_exr(exr)
-        sim = np.dstack([next(v for k, v in passes.items() if k.endswith(c)) for c in "RGB"])
+        sim = read_linear(exr)
         if sim.shape[:2] != f.image.shape[:2]:
             raise ValueError(f"{exr} is {sim.shape[1]}x{sim.shape[0]} but {f.path} is "
                              f"{f.image.shape[1]}x{f.image.shape[0]}; render at the camera's resolution")

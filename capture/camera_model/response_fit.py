@@ -10,6 +10,7 @@ from collections import defaultdict
 from dataclasses import replace
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from .frames import Frame
 from .model import CODES, Response
@@ -59,9 +60,10 @@ def fit_response(frames: list[Frame], smoothing: float = 15.0, samples: int = 10
         # exposure = time x gain: an ISO of 100 x gain at f/1 makes colour-hdri's exposure value the same product
         stack.append(Image(data=f.image.astype(np.float64),
                            metadata=Metadata(f_number=1.0, exposure_time=f.exposure_us * 1e-6, iso=f.gain * 100.0)))
-    crfs = camera_response_functions_Debevec1997(stack, sampling_function=samples_flat_blocks,
-                                                 sampling_function_kwargs={"samples": samples}, l_s=smoothing,
-                                                 extrapolating_function=None, n=CODES, normalise=False)
+    with threadpool_limits(limits=1):   # multi-threaded BLAS on 2 shared cores made this least squares ~10x slower
+        crfs = camera_response_functions_Debevec1997(stack, sampling_function=samples_flat_blocks,
+                                                     sampling_function_kwargs={"samples": samples}, l_s=smoothing,
+                                                     extrapolating_function=None, n=CODES, normalise=False)
     linear = _monotonic(_extend_ends(np.asarray(crfs, dtype=float)))
     response = Response(linear)
     residual = bracket_residual(response, stack_frames)
@@ -92,7 +94,7 @@ def samples_flat_blocks(data: np.ndarray, samples: int = 1000, block: int = 6, s
     return np.transpose(codes, (0, 2, 1))
 
 
-RELIABLE = (24, 232)      # codes the hat weighting leaves well determined; beyond, power-law extrapolation
+RELIABLE = (32, 224)      # codes the hat weighting leaves well determined; beyond, power-law extrapolation
 _REACH = 32              # codes next to each end the extrapolation is fitted on
 
 
