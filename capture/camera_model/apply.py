@@ -85,11 +85,10 @@ def forward_curve(response: Response) -> ForwardCurve:
     return _CURVES[key][1]
 
 
-def choose_exposure(camera_rgb: np.ndarray, ae: AutoExposure, curve: ForwardCurve, step: int | None = None) -> Exposure:
-    """Meter the frame as the camera would and choose exposure time and gain (``step``: the statistics grid's
-    pixel stride; None picks one for ~5000 samples, 1 when the frame given is already that grid)."""
-    step = step or metering.subsample_step(camera_rgb.shape[:2])
-    sample = np.ascontiguousarray(camera_rgb[::step, ::step], dtype=np.float32)
+def choose_exposure(stats: np.ndarray, ae: AutoExposure, curve: ForwardCurve) -> Exposure:
+    """Meter the camera's statistics grid (``metering.grid`` of its linear RGB) as the camera would and
+    choose exposure time and gain."""
+    sample = np.ascontiguousarray(stats, dtype=np.float32)
     wts = metering.weights(sample.shape[:2], ae.metering, ae.centre_sigma, ae.roi)
 
     def meter(product: float) -> float:
@@ -169,9 +168,7 @@ def apply(linear_rgb: np.ndarray, model: ImagingModel, seed: int = 0,
     if ae is not None and manual is not None:
         exposure = Exposure(float(manual[0]), float(manual[1]), float("nan"), None, None, 0)
     elif ae is not None:   # meter on the statistics grid before developing the whole frame
-        step = metering.subsample_step(linear_rgb.shape[:2])
-        exposure = choose_exposure(colour_correct(linear_rgb[::step, ::step], model.response, model.colour), ae,
-                                   curve, step=1)
+        exposure = choose_exposure(colour_correct(metering.grid(linear_rgb), model.response, model.colour), ae, curve)
     scale = exposure.exposure_us * 1e-6 * exposure.gain * ae.sensitivity if exposure is not None else 1.0
     signal = colour_correct(linear_rgb, model.response, model.colour, scale)
     gain = exposure.gain if exposure is not None else 1.0

@@ -95,7 +95,7 @@ def colour_case(truth, response, seed: int, size) -> dict:
     sim = (srgb_encode(linear) * 255 + 0.5).astype(np.uint8)
     t0 = time.perf_counter()
     try:
-        found_r, found_s = chart.find(real, "mcc"), chart.find(sim, "mcc")
+        found_r, found_s = chart.find(real), chart.find(sim)
     except chart.ChartNotFound:
         return {"colour_s": time.perf_counter() - t0, "de2000_before": None, "de2000_after": None, "ccm": "chart not found"}
     _, rp = chart.oriented(found_r.quads, chart.sample(real / 255.0, found_r.quads), response.to_linear)
@@ -103,7 +103,8 @@ def colour_case(truth, response, seed: int, size) -> dict:
     fit = fit_colour(srgb_decode(sp.colours), rp.colours, rp.usable & sp.usable, response)
     return {"colour_s": time.perf_counter() - t0, "de2000_before": fit.de2000_before["mean"],
             "de2000_after": fit.de2000_after["mean"], "de2000_after_max": fit.de2000_after["max"],
-            "ccm": f"{fit.correction.method} {list(fit.correction.options.values())[0]}"}
+            "ccm": f"{fit.correction.method} {list(fit.correction.options.values())[0]}",
+            "detectors": f"{found_r.detector}/{found_s.detector}"}
 
 
 def apply_case(repeats: int = 15) -> dict:
@@ -189,7 +190,7 @@ def _print(result: dict) -> None:
         cells = [f"{r[c]:>14d}" if isinstance(r[c], int) and not isinstance(r[c], bool) else
                  (f"{r[c]:>14.4f}" if isinstance(r[c], float) else f"{str(r[c]):>14s}") for c in cols]
         print(" ".join(cells) + f"  {'ok' if r['metering_ok'] else 'MISSED'}/{'ok' if r['order_ok'] else 'MISSED'}"
-                                f"  {r['ccm']}")
+                                f"  {r['ccm']} ({r.get('detectors', '-')})")
     a = result["apply"]
     print(f"apply to 640x480 (median of 15): {a['apply_ms_linear_ccm']:.1f} ms wall / {a['apply_cpu_ms_linear_ccm']:.1f} "
           f"ms CPU with a 3x3 correction, {a['apply_ms_root_polynomial_ccm']:.1f} ms wall / "

@@ -31,8 +31,8 @@ def reference_linear() -> np.ndarray:
     import colour
     sds = colour.SDS_COLOURCHECKERS["ColorChecker N Ohta"]
     cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
-    illuminant = colour.SDS_ILLUMINANTS["D65"]
-    xyz = np.array([colour.sd_to_XYZ(sd, cmfs, illuminant) / 100.0 for sd in sds.values()])
+    illuminant = colour.SDS_ILLUMINANTS["D65"].copy().align(cmfs.shape)
+    xyz = np.array([colour.sd_to_XYZ(sd.copy().align(cmfs.shape), cmfs, illuminant) / 100.0 for sd in sds.values()])
     return np.asarray(colour.XYZ_to_RGB(xyz, "sRGB", apply_cctf_encoding=False), dtype=float)
 
 

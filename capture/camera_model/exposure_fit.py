@@ -52,7 +52,7 @@ def fit_auto_exposure(frames: list[Frame], response: Response, start: AutoExposu
     t_range = tuple(exposure_us) if exposure_us else (min(f.exposure_us for f in frames), max(f.exposure_us for f in frames))
     g_range = tuple(gain) if gain else (min(f.gain for f in frames), max(f.gain for f in frames))
     limits = [_at_limit(f, t_range, g_range) for f in frames]
-    choice, levels_by, candidates = _choose_metering(frames, limits, roi)
+    choice, levels_by, candidates = _choose_metering(frames, limits, roi, response)
     metered = levels_by[choice]
     inside = [m for m, lim in zip(metered, limits) if lim is None]
     limits = _confirm_limits(metered, limits, inside)
@@ -98,20 +98,18 @@ def _confirm_limits(metered, limits, inside) -> list:
     return out
 
 
-def _choose_metering(frames, limits, roi) -> tuple[str, dict]:
+def _choose_metering(frames, limits, roi, response: Response) -> tuple[str, dict, dict]:
     """Metered levels of every frame under each candidate metering, and the candidate whose levels agree best."""
     candidates = dict(CANDIDATES)
     if roi:
         candidates["roi"] = ("roi", {"roi": tuple(roi)})
+    stats = [metering.grid(response.to_linear(f.image)) for f in frames]
+    curved = [response.to_output(np.clip(s, 0.0, 1.0)) for s in stats]
     levels_by = {}
     for name, (kind, options) in candidates.items():
-        wts = None
-        levels_by[name] = []
-        for f in frames:
-            if wts is None or wts.shape != f.image.shape[:2]:
-                wts = metering.weights(f.image.shape[:2], kind, options.get("centre_sigma", 0.25),
-                                       options.get("roi", (0.0, 0.0, 1.0, 1.0)))
-            levels_by[name].append(metering.level(f.image, wts))
+        levels_by[name] = [metering.level(c, metering.weights(c.shape[:2], kind, options.get("centre_sigma", 0.25),
+                                                              options.get("roi", (0.0, 0.0, 1.0, 1.0))))
+                           for c in curved]
     best = min(levels_by, key=lambda n: _spread(levels_by[n], limits))
     return best, levels_by, candidates
 

@@ -11,7 +11,7 @@ import numpy as np
 
 from . import frames as frames_mod
 from .apply import choose_exposure, forward_curve
-from .metering import level, weights
+from .metering import grid, meter_frame
 from .exposure_fit import fit_auto_exposure
 from .model import AutoExposure, ImagingModel, Response
 from .noise_fit import NOISE_ADVICE, fit_noise
@@ -139,8 +139,8 @@ def predict_frames(model: ImagingModel, auto) -> list[dict]:
     out = []
     for f in auto:
         scene = response.to_linear(f.image) / (f.product * 1e-6 * ae.sensitivity)
-        chosen = choose_exposure(scene.astype(np.float32), ae, curve)
-        measured = level(f.image, weights(f.image.shape[:2], ae.metering, ae.centre_sigma, ae.roi))
+        chosen = choose_exposure(grid(scene), ae, curve)
+        measured = meter_frame(f.image, response, ae.metering, ae.centre_sigma, ae.roi)
         out.append({"frame": f.path.name, "measured_product": f.product,
                     "predicted_product": chosen.exposure_us * chosen.gain, "measured_level": measured,
                     "predicted_level": chosen.metered,

@@ -1,9 +1,14 @@
 """Metering: the weighted output luma an auto-exposure steers to its target.
 
-The same weights meter a real frame (when fitting) and a simulated one (when applying), so a fitted
-target means the same thing in both. Luma: BT.709 weights on the output levels (0..1)."""
+A camera meters on a statistics grid of block averages of its linear signal (where sensor noise
+averages out) and judges them through its tone curve. A real frame is metered the same way (its
+levels linearised through the response, averaged over the same grid, curved again), so a fitted
+target means the same in both and does not carry the noise's bias (a concave curve lowers the mean
+of noisy levels: 3.5% at high gain in ``bench exposure`` before this). Luma: BT.709 weights on the
+output levels (0..1)."""
 from __future__ import annotations
 
+import cv2
 import numpy as np
 
 LUMA = np.array([0.2126, 0.7152, 0.0722])
@@ -33,6 +38,20 @@ def level(output: np.ndarray, wts: np.ndarray) -> float:
     return float(np.einsum("hwc,c,hw->", output, LUMA, wts))
 
 
-def subsample_step(shape: tuple[int, int], pixels: int = 5000) -> int:
-    """A pixel stride that leaves about ``pixels`` samples: a camera meters on a statistics grid too."""
-    return max(1, int(np.sqrt(shape[0] * shape[1] / pixels)))
+CELLS = 4800
+
+
+def grid(linear: np.ndarray, cells: int = CELLS) -> np.ndarray:
+    """Block averages of a linear image (H, W, 3) on a grid of about ``cells`` cells (area resampling)."""
+    h, w = linear.shape[:2]
+    step = max(1.0, float(np.sqrt(h * w / cells)))
+    size = (max(1, int(round(w / step))), max(1, int(round(h / step))))
+    return cv2.resize(np.ascontiguousarray(linear, dtype=np.float32), size, interpolation=cv2.INTER_AREA)
+
+
+def meter_frame(levels: np.ndarray, response, metering: str, centre_sigma: float = 0.25,
+                roi=(0.0, 0.0, 1.0, 1.0)) -> float:
+    """The metered level of a recorded frame (output levels 0..1) as its camera meters it."""
+    stats = grid(response.to_linear(levels))
+    curved = response.to_output(np.clip(stats, 0.0, 1.0))
+    return level(curved, weights(stats.shape[:2], metering, centre_sigma, roi))
