@@ -118,3 +118,20 @@ def test_check_compares_pairs_and_escapes_names_in_html(tmp_path, capsys):
     assert summary["unmatched"] == [str(tmp_path / "sim" / "lonely.png")]
     page = (tmp_path / "chk" / "report.html").read_text()
     assert "b&lt;script&gt;" in page and "<script>" not in page and page.count("data:image/png;base64") == 2
+
+
+def test_check_reads_a_pairs_directory(tmp_path, capsys):
+    rng = np.random.default_rng(4)
+    for sample in ("s01", "s02"):
+        linear = synthetic.scene(rng, (60, 80)) * 0.3
+        (tmp_path / "pairs" / sample / "real").mkdir(parents=True)
+        cv2.imwrite(str(tmp_path / "pairs" / sample / "sim.png"), (srgb_encode(linear) * 255 + 0.5).astype(np.uint8))
+        for k in range(2):
+            cv2.imwrite(str(tmp_path / "pairs" / sample / "real" / f"frame_{k:04d}.png"),
+                        (srgb_encode(linear * 0.7) * 255 + 0.5).astype(np.uint8))
+    (tmp_path / "pairs" / "s03").mkdir()
+    (tmp_path / "pairs" / "s03" / "scene.json").write_text("{}")     # recreated but not captured yet
+    assert main(["exposure", "check", str(tmp_path / "pairs"), "--out", str(tmp_path / "chk"), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["pairs"] == 4 and summary["mean_luma_difference"] < 0
+    assert summary["unmatched"] == [str(tmp_path / "pairs" / "s03")]

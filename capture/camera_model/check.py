@@ -1,6 +1,7 @@
 """``exposure check``: how close renders and captures of the same scenes are in brightness and colour.
 
-Pairs are matched by file stem (``SIM_DIR/x.png`` with ``REAL_DIR/x.png``). Per pair: the mean,
+Pairs are matched by file stem (``SIM_DIR/x.png`` with ``REAL_DIR/x.png``), or come from a pairs
+directory (``isu_validate.pairs``: each sample's ``sim.png`` with each of its ``real/`` frames). Per pair: the mean,
 median and 5th/95th percentile of display luma (BT.709 weights on the 8-bit levels), their ratio, and
 the CIE dE2000 between the two images' mean colours; pooled and per-pair luma histograms; an HTML page."""
 from __future__ import annotations
@@ -33,6 +34,21 @@ def pairs(sim_dir: str | Path, real_dir: str | Path) -> tuple[list[tuple[Path, P
     return matched, unmatched
 
 
+def pairs_of_directory(root: str | Path) -> tuple[list[tuple[Path, Path]], list[str]]:
+    """(sim.png, real frame) of every sample of a pairs directory; samples without frames are listed."""
+    from isu_validate.pairs import PairsDir
+    matched, unmatched = [], []
+    for sample in PairsDir(root).samples():
+        frames = sample.real_frames()
+        if not sample.sim.is_file() or not frames:
+            unmatched.append(str(sample.path))
+        matched += [(sample.sim, frame) for frame in frames if sample.sim.is_file()]
+    if not matched:
+        raise ValueError(f"no sample of {root} has both sim.png and captured frames in real/ (capture them with "
+                         "`isu-validate capture shoot --pair DIR/<sample>`)")
+    return matched, unmatched
+
+
 def measure(image: np.ndarray) -> dict:
     luma = (image.astype(np.float64) / 255.0) @ LUMA
     return {"mean": float(luma.mean()), "median": float(np.median(luma)), "p5": float(np.percentile(luma, 5)),
@@ -40,13 +56,15 @@ def measure(image: np.ndarray) -> dict:
             "mean_colour": (image.reshape(-1, 3).mean(axis=0) / 255.0).tolist()}
 
 
-def compare(sim_dir: str | Path, real_dir: str | Path) -> dict:
+def compare(sim_dir: str | Path, real_dir: str | Path | None = None) -> dict:
+    """Per-pair and pooled brightness and colour; ``real_dir`` None: ``sim_dir`` is a pairs directory."""
     from .colour_fit import de2000
-    matched, unmatched = pairs(sim_dir, real_dir)
+    matched, unmatched = pairs(sim_dir, real_dir) if real_dir is not None else pairs_of_directory(sim_dir)
     rows = []
     for sim_path, real_path in matched:
         s, r = measure(read_rgb8(sim_path)), measure(read_rgb8(real_path))
-        rows.append({"name": sim_path.stem, "sim": str(sim_path), "real": str(real_path), "sim_luma": s, "real_luma": r,
+        name = sim_path.stem if real_dir is not None else f"{sim_path.parent.name}/{real_path.stem}"
+        rows.append({"name": name, "sim": str(sim_path), "real": str(real_path), "sim_luma": s, "real_luma": r,
                      "luma_ratio": r["mean"] / s["mean"] if s["mean"] > 0 else float("inf"),
                      "luma_difference": r["mean"] - s["mean"],
                      "de2000_mean_colour": float(de2000(np.array([s["mean_colour"]]), np.array([r["mean_colour"]]))[0])})

@@ -5,7 +5,7 @@
     isu-validate exposure chart --real REAL.png --camera CAM.toml --out SIM.png
     isu-validate exposure colour --real REAL.png --sim SIM.png|SIM.exr|reference --out CCM.json [--json]
                                  [--camera CAM.toml [--camera-out CAM3.toml]]
-    isu-validate exposure check SIM_DIR REAL_DIR [--out DIR] [--json]
+    isu-validate exposure check SIM_DIR REAL_DIR | PAIRS [--out DIR] [--json]
 """
 from __future__ import annotations
 
@@ -66,8 +66,8 @@ def register(sub) -> None:
     col.set_defaults(func=_colour)
 
     chk = s.add_parser("check", help="brightness and colour of renders against captures of the same scenes")
-    chk.add_argument("sim_dir", type=Path, metavar="SIM_DIR")
-    chk.add_argument("real_dir", type=Path, metavar="REAL_DIR")
+    chk.add_argument("sim_dir", type=Path, metavar="SIM_DIR|PAIRS", help="renders, or a pairs directory alone")
+    chk.add_argument("real_dir", type=Path, nargs="?", metavar="REAL_DIR", help="captures named like the renders")
     chk.add_argument("--out", type=Path, default=Path("exposure-check"), help="folder for report.html and check.json")
     chk.add_argument("--json", action="store_true")
     chk.set_defaults(func=_check)
