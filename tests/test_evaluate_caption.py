@@ -20,9 +20,9 @@ SCENE = {"driver_gender": "FEMALE", "driver_emotion": "HAPPY", "driver_height": 
          "phone_position": "NONE", "seat_belt": "YES", "tshirt_colour": "WHITE", "child_seat": "YES", "child": "NO",
          "child_seat_orientation": "REAR_FACING", "car_lights": "OFF", "external_light": "HIGH", "luggage": "YES",
          "luggage_orientation": 90.0, "luggage_position": "BACK", "luggage_colour": "ANTHRACITE",
-         "phone": "NO", "cola_bottle": "YES", "can": "NO"}
+         "phone_codriver_seat": "NO", "colacan_codriver_seat": "NO", "colabottle_codriver_seat": "NO"}
 GOOD = ("A smiling woman in a white T-shirt drives with her seat belt on. An empty rear-facing child seat is on "
-        "the passenger seat and a dark grey suitcase lies on the back seat. There is a cola bottle.")
+        "the passenger seat and a dark grey suitcase lies on the back seat.")
 
 
 @pytest.fixture(scope="module")
@@ -152,11 +152,13 @@ def test_reference_caption_uses_only_active_features(space):
     text = reference_caption(space, SCENE)
     assert text == ("The image shows the inside of a car in bright daylight. A female driver in a white T-shirt "
                     "looks happy and is wearing a seat belt. An empty rear-facing child seat is on the front "
-                    "passenger seat. An anthracite suitcase lies on the back seat. A cola bottle lies in the car.")
-    bare = dict(SCENE, child_seat="NO", luggage="NO", cola_bottle="NO", car_lights="ON", external_light="LOW")
+                    "passenger seat. An anthracite suitcase lies on the back seat.")
+    bare = dict(SCENE, child_seat="NO", luggage="NO", colabottle_codriver_seat="YES", car_lights="ON",
+                external_light="LOW")
     text = reference_caption(space, bare)  # latent luggage colour and child-seat values are still in the dict
     assert "suitcase" not in text and "anthracite" not in text and "child" not in text
     assert "at night with the cabin lights on." in text
+    assert text.endswith("A cola bottle lies on the front passenger seat.")
 
 
 def test_template_errors_name_the_problem(space):

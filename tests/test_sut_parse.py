@@ -10,7 +10,7 @@ from isu_validate.sut.parse import normalise_answer, parse_caption, parse_vqa
 SCENE = {"driver_gender": "MALE", "driver_emotion": "HAPPY", "driver_height": "H1", "driver_weight": "W1",
          "phone_position": "P3", "seat_belt": "YES", "tshirt_colour": "BLACK", "child_seat": "YES", "child": "YES",
          "child_seat_orientation": "REAR_FACING", "car_lights": "ON", "external_light": "LOW", "luggage": "NO",
-         "phone": "YES", "cola_bottle": "NO", "can": "NO"}
+         "phone_codriver_seat": "NO", "colacan_codriver_seat": "NO", "colabottle_codriver_seat": "NO"}
 
 
 @pytest.fixture(scope="module")
@@ -24,7 +24,8 @@ def test_prompt_asks_only_active_features_in_figure_2_style():
     assert [q.key for q in request.questions] == [q.key for q in space.questions(SCENE)]
     text = request.prompt
     assert text.startswith(space.prompt_rules[0]) and "Answer NONE" in text
-    assert '"child_seat_orientation": How is the child seat oriented? Options: FRONT_FACING, REAR_FACING, NONE' in text
+    assert ('"child_seat_orientation": Is the baby seat front-facing or rear-facing? '
+            'Options: FRONT_FACING, REAR_FACING, NONE') in text
     assert "luggage_colour" not in text and "REAR_FACING" in text and "Return JSON" in text
     custom = build_request(space, SCENE, "x.png", "vqa", prompt="Rules first.\n{questions}\nThanks.")
     assert custom.prompt.startswith("Rules first.\nQuestions") and custom.prompt.endswith("Thanks.")
@@ -38,9 +39,9 @@ def test_prompt_asks_only_active_features_in_figure_2_style():
     ('```json\n{"seat_belt": "YES", "child": "YES"}\n```', {"seat_belt": "YES", "child": "YES"}),
     ('Here you go: {"seat_belt": "yes", "child": "Yes"} Hope it helps!', {"seat_belt": "YES", "child": "YES"}),
     ("{'seat_belt': 'YES', 'driver_gender': 'male'}", {"seat_belt": "YES", "driver_gender": "MALE"}),
-    ('{"seat_belt": true, "phone": false}', {"seat_belt": "YES", "phone": "NO"}),
+    ('{"seat_belt": true, "phone_codriver_seat": false}', {"seat_belt": "YES", "phone_codriver_seat": "NO"}),
     ("{seat_belt: YES, child_seat_orientation: rear-facing,}", {"seat_belt": "YES", "child_seat_orientation": "REAR_FACING"}),
-    ('{"Seat Belt": "Yes.", "What is the gender of the driver?": "Male"}', {"seat_belt": "YES", "driver_gender": "MALE"}),
+    ('{"Seat Belt": "Yes.", "Is the driver male or female?": "Male"}', {"seat_belt": "YES", "driver_gender": "MALE"}),
     ('{"answers": {"seat_belt": "NO"}}', {"seat_belt": "NO"}),
     ('{"seat_belt": {"answer": "YES", "confidence": 0.8}}', {"seat_belt": "YES"}),
     ('seat_belt: NO\ndriver_gender: FEMALE', {"seat_belt": "NO", "driver_gender": "FEMALE"}),
@@ -86,7 +87,7 @@ def test_answer_normalisation(value, options, expected):
 def test_invalid_missing_and_conflicting_are_classified(questions):
     parsed = parse_vqa('{"seat_belt": "MAYBE", "child": "YES", "child": "NO", "driver_gender": "MALE"}', questions)
     assert parsed.status["seat_belt"] == "invalid" and parsed.status["child"] == "invalid"
-    assert parsed.status["driver_gender"] == "answered" and parsed.status["phone"] == "missing"
+    assert parsed.status["driver_gender"] == "answered" and parsed.status["phone_codriver_seat"] == "missing"
     assert any(p.startswith("seat_belt: invalid") and "MAYBE" in p for p in parsed.problems)
     assert any("conflicting" in p for p in parsed.problems)
 

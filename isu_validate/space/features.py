@@ -27,6 +27,12 @@ class Feature:
     options: tuple[str, ...] = ()
     truth_map: Mapping[str, str] = field(default_factory=dict)
     caption: str = ""
+    label: str = ""               # short display name ("K1 phone on the co-driver seat")
+
+    @property
+    def display_name(self) -> str:
+        """What people read: the ``label`` when the space gives one, else the feature's name."""
+        return self.label or self.name
 
     @property
     def discrete(self) -> bool:
@@ -92,7 +98,7 @@ class Feature:
 
 
 _KNOWN_KEYS = {"type", "values", "low", "high", "unit", "active_when", "predicted", "weight",
-               "question", "options", "truth", "caption", "description"}
+               "question", "options", "truth", "caption", "description", "label"}
 
 
 def parse_feature(name: str, raw: Mapping[str, Any], where: str) -> Feature:
@@ -105,8 +111,11 @@ def parse_feature(name: str, raw: Mapping[str, Any], where: str) -> Feature:
     kind = raw.get("type")
     if kind not in TYPES:
         raise SpaceError(f"{here}: unknown type {kind!r}; use one of {', '.join(TYPES)}")
+    label = raw.get("label", "")
+    if not isinstance(label, str):
+        raise SpaceError(f"{here}: `label` must be a short text, got {label!r}")
     kwargs: dict[str, Any] = {"name": name, "type": kind, "unit": str(raw.get("unit", "")),
-                              "caption": str(raw.get("caption", ""))}
+                              "caption": str(raw.get("caption", "")), "label": label.strip()}
     if kind in DISCRETE_TYPES:
         values = raw.get("values")
         if not isinstance(values, list) or not values:
