@@ -23,12 +23,27 @@ def test_prompt_asks_only_active_features_in_figure_2_style():
     request = build_request(space, SCENE, "x.png", "vqa")
     assert [q.key for q in request.questions] == [q.key for q in space.questions(SCENE)]
     text = request.prompt
-    assert text.startswith(space.prompt_rules[0]) and "Answer NONE" in text
+    # the paper's rules, word for word, then key/question/answer_options blocks and the JSON to return
+    assert text.startswith("You are an image analysis assistant to evaluate in-cabin scenes.")
+    for rule in ("- Return only the JSON.", "- Do not provide explanations.",
+                 "- For each question, choose exactly one answer from the given `answer_options`.",
+                 "- Do not create new answers, only choose from the provided options.",
+                 '- If a question references something not present, select the provided "NONE".'):
+        assert rule in text
+    assert ('key: "driver_gender"\nquestion: "Is the driver male or female?"\n'
+            'answer_options: ["MALE", "FEMALE"]') in text
+    assert 'answer_options: ["FRONT_FACING", "REAR_FACING", "NONE"]' in text
+    assert text.index("# Rules") < text.index("# Questions") < text.index("# Output")
+    assert "luggage_colour" not in text and '"colabottle_codriver_seat": "..."' in text
+    # the earlier wording, by name
+    compact = build_request(space, SCENE, "x.png", "vqa", style="compact").prompt
+    assert compact.startswith("You are an in-car scene understanding system") and "Answer NONE" in compact
     assert ('"child_seat_orientation": Is the baby seat front-facing or rear-facing? '
-            'Options: FRONT_FACING, REAR_FACING, NONE') in text
-    assert "luggage_colour" not in text and "REAR_FACING" in text and "Return JSON" in text
+            'Options: FRONT_FACING, REAR_FACING, NONE') in compact and "Return JSON" in compact
+    with pytest.raises(ValueError, match="unknown prompt style 'fancy'.*compact"):
+        build_request(space, SCENE, "x.png", "vqa", style="fancy")
     custom = build_request(space, SCENE, "x.png", "vqa", prompt="Rules first.\n{questions}\nThanks.")
-    assert custom.prompt.startswith("Rules first.\nQuestions") and custom.prompt.endswith("Thanks.")
+    assert custom.prompt.startswith("Rules first.\n# Questions") and custom.prompt.endswith("Thanks.")
     caption = build_request(space, SCENE, "x.png", "vc")
     assert caption.prompt.startswith("Describe what is visible in the scene") and caption.questions == ()
     with pytest.raises(ValueError, match="unknown SUT mode"):
@@ -124,3 +139,30 @@ def test_huge_and_pathological_replies_stay_fast(questions):
         start = time.perf_counter()
         parse_vqa(text, questions)
         assert time.perf_counter() - start < 3.0
+
+
+def test_a_run_asks_in_its_prompt_style_and_resumes_in_it(tmp_path):
+    import argparse
+
+    from isu_validate.commands.run import add_run_options, config_from_args
+    from isu_validate.pipeline import build_components
+    from isu_validate.search.loop import _prepare_run_dir
+
+    space = load_space()
+    parser = argparse.ArgumentParser()
+    add_run_options(parser)
+    for argv, opening in ((["--out", str(tmp_path / "a")], "You are an image analysis assistant"),
+                          (["--out", str(tmp_path / "b"), "--prompt-style", "compact"], "You are an in-car scene")):
+        config = config_from_args(parser.parse_args(["--sut", "command:true"] + argv))
+        parts = build_components(config.pipeline, space)   # the real renderer (not started), SUT and judge
+        assert parts.build_request(space, SCENE, "x.png", "vqa", None).prompt.startswith(opening)
+        _prepare_run_dir(config, resume=False)             # writes run.json as a run does
+    # resuming takes the style from run.json, whatever the command line says now
+    resumed = config_from_args(parser.parse_args(["--out", str(tmp_path / "b"), "--resume", "--prompt-style", "paper"]))
+    assert resumed.pipeline.prompt_style == "compact"
+    with pytest.raises(SystemExit):
+        parser.parse_args(["--prompt-style", "poetic"])
+    vc = config_from_args(parser.parse_args(["--out", str(tmp_path / "c"), "--mode", "vc", "--sut", "command:true",
+                                             "--caption-template", "isu-paper-compact"]))
+    judge = build_components(vc.pipeline, space).judge
+    assert judge.template == "isu-paper-compact"

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from ..pipeline import PipelineConfig
+from ..sut.prompt import DEFAULT_PROMPT_STYLE, PROMPT_STYLES
 from .sut import parse_options
 from ..search import ALGORITHMS, RunConfig, RunError, run_search
 
@@ -39,6 +40,13 @@ def add_run_options(p) -> None:
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--threshold", type=float, help="oracle threshold (default: 1.0 for vqa, F_emb 0.65 for vc)")
     p.add_argument("--prompt", help="override the prompt sent to the SUT")
+    p.add_argument("--prompt-style", choices=sorted(PROMPT_STYLES), default=DEFAULT_PROMPT_STYLE,
+                   help="wording of the VQA prompt: paper (the paper's Figure 2, default) or compact "
+                        "(isu-validate's earlier, shorter wording)")
+    p.add_argument("--caption-template", metavar="NAME|FILE",
+                   help="reference-caption template for --mode vc: a name in data/captions (isu-paper: the "
+                        "paper's captioning figure, the default for isu-paper; isu-paper-compact: the earlier wording) "
+                        "or a .toml file")
     p.add_argument("--repeats", type=int, default=1, help="ask each scene K times, majority vote")
     p.add_argument("--preset", default="draft", help="render preset: draft | standard | final")
     p.add_argument("--camera", default="default", help="camera rig: shipped name or TOML path")
@@ -72,7 +80,8 @@ def config_from_args(args) -> RunConfig:
         raise ValueError(f"--budget must be at least 1 test, got {budget_tests}")
     pipeline = PipelineConfig(
         run_dir=str(args.out), space=args.space, sut=args.sut, mode=args.mode, threshold=args.threshold,
-        prompt=args.prompt, repeats=args.repeats, preset=args.preset, camera=args.camera, cabin=args.cabin,
+        prompt=args.prompt, prompt_style=args.prompt_style, caption_template=args.caption_template,
+        repeats=args.repeats, preset=args.preset, camera=args.camera, cabin=args.cabin,
         channels=tuple(c for c in args.channels.split(",") if c), sut_timeout_s=args.sut_timeout,
         sut_options=parse_options(args.sut_option), render_threads=render_threads(args.workers),
         factory=args.pipeline_factory)

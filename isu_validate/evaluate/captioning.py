@@ -14,7 +14,7 @@ from ..protocols import SUTRequest, SUTResponse, Verdict
 from ..space import SceneSpace
 from . import similarity, text_metrics
 from .oracles import CAPTION_METRICS, DEFAULT_THRESHOLD, check_conjunction, conjunction_failed, emb_failed
-from .reference_caption import reference_caption
+from .reference_caption import reference_caption, template_for
 
 SETTINGS = {**text_metrics.SETTINGS, **similarity.SETTINGS}
 
@@ -30,8 +30,9 @@ class CaptionJudge:
     mode = "vc"
 
     def __init__(self, space: SceneSpace, threshold: float | Mapping[str, float] | None = None,
-                 oracle: str | None = None, templates: str | None = None):
-        self.space, self.templates = space, templates
+                 oracle: str | None = None, template: str | None = None):
+        self.space, self.template = space, template
+        template_for(space, template)  # a missing or foreign template stops the run before any test
         self.oracle = oracle or "emb"
         if self.oracle == "emb":
             if isinstance(threshold, Mapping):
@@ -48,13 +49,14 @@ class CaptionJudge:
         settings = {"oracle": self.oracle, "threshold": self.threshold}
         if response.error:
             return Verdict({}, 1.0, False, {"sut_error": response.error, **settings})
-        reference = reference_caption(self.space, scene, self.templates)
+        reference = reference_caption(self.space, scene, self.template)
         captions = [c or "" for c in (response.extra.get("captions") or [response.caption])]
         scored = [caption_metrics(c, reference) for c in captions]
         fitness = {m: sum(s[m] for s in scored) / len(scored) for m in CAPTION_METRICS}
         failed = (emb_failed(fitness, self.threshold) if self.oracle == "emb"
                   else conjunction_failed(fitness, self.threshold))
-        details: dict[str, Any] = {"reference_caption": reference, "metrics": SETTINGS, **settings,
+        details: dict[str, Any] = {"reference_caption": reference, "caption_template": self.template or "default",
+                                   "metrics": SETTINGS, **settings,
                                    "truncated": any(similarity.is_truncated(c) for c in captions if c.strip())}
         if any(not c.strip() for c in captions):
             details["problems"] = ["empty caption: scored 0 on every metric"]
