@@ -61,6 +61,48 @@ def test_heads_learn_what_is_visible_and_the_card_says_how_well(trained):
     assert (folder / "model" / "heads.npz").stat().st_size < 5_000_000
 
 
+class DimPainter(PatchPainter):
+    """The same scenes under another 'preset': darker and noisier, as a cheaper render would be."""
+
+    def render(self, scene, out: Path):
+        super().render(scene, out)
+        img = cv2.imread(str(out)).astype(float) * 0.5
+        noise = np.random.default_rng(len(str(out))).normal(0, 12, img.shape)
+        cv2.imwrite(str(out), np.clip(img + noise, 0, 255).astype(np.uint8))
+
+
+def test_held_out_accuracy_is_also_measured_at_other_presets(tmp_path, backbone):
+    opened = []
+
+    def renderer_for(preset):
+        opened.append(preset)
+        return DimPainter()
+
+    card = train_reference(SPACE, PatchPainter(), tmp_path / "model", tmp_path / "work", n_train=48, n_test=24,
+                           seed=3, preset="painted", backbone=backbone, other_presets={"dim": 10},
+                           renderer_for=renderer_for)
+    assert opened == ["dim"] and card["held_out_scenes_by_preset"] == {"painted": 24, "dim": 10}
+    dim = card["held_out_by_preset"]["dim"]["per_feature"]
+    assert dim["tshirt_colour"]["n"] == 10 and 0.0 <= dim["tshirt_colour"]["accuracy"] <= 1.0
+    assert card["held_out_by_preset"]["painted"] == card["held_out"]
+    assert len(list((tmp_path / "work" / "held-out-dim").glob("*.png"))) == 10
+    text = (tmp_path / "model" / "MODEL_CARD.md").read_text()
+    assert "| feature | painted | n | dim | n | training accuracy |" in text
+    assert "--check-preset dim:10" in text and "(preset `dim`)" in text
+
+
+def test_check_preset_arguments_are_checked():
+    from isu_validate.commands.reference import parse_check
+
+    assert parse_check("standard:50", 200) == ("standard", 50) and parse_check("draft", 80) == ("draft", 80)
+    with pytest.raises(ValueError, match="unknown render preset 'fancy'"):
+        parse_check("fancy:3", 10)
+    with pytest.raises(ValueError, match="between 1 and --held-out"):
+        parse_check("standard:500", 200)
+    with pytest.raises(ValueError, match="whole number"):
+        parse_check("standard:many", 200)
+
+
 def test_rendered_sets_resume_without_rendering_again(trained, backbone):
     folder, _ = trained
 
