@@ -30,20 +30,47 @@ class Example:
     scene: dict      # canonical
 
 
-def balanced_scenes(space: SceneSpace, n: int, rng: np.random.Generator) -> list[dict]:
+def balanced_scenes(space: SceneSpace, n: int, rng: np.random.Generator, pool_factor: int = 6) -> list[dict]:
     """Valid scenes in which each predicted feature's answers are about equally frequent
-    (uniform values would make, e.g., 'no phone in hand' 1 in 11)."""
-    scenes = []
-    for scene in space.sample(rng, n):
-        for feature in space.predicted:
-            by_answer = defaultdict(list)
-            for value in feature.values:
-                by_answer[feature.truth(value)].append(value)
-            answers = sorted(by_answer)
-            values = by_answer[answers[int(rng.integers(len(answers)))]]
-            scene[feature.name] = values[int(rng.integers(len(values)))]
-        scenes.append(space.repair(scene, rng))
-    return scenes
+    (uniform values would make, e.g., 'no phone in hand' 1 in 11).
+
+    Each candidate draws every predicted feature's answer uniformly, then is repaired; repairs
+    undo answers that constraints make rare (a child seat competes with three things for the
+    co-driver seat), so ``n`` scenes are then chosen greedily from ``pool_factor * n``
+    candidates, each time the one that best lifts the answers seen least so far."""
+    pool = [space.repair(_uniform_answers(space, scene, rng), rng) for scene in space.sample(rng, n * pool_factor)]
+    columns = [(f.name, answer) for f in space.predicted for answer in sorted({f.truth(v) for v in f.values})]
+    feature_of = np.array([space.names.index(name) for name, _ in columns])
+    target = np.array([1.0 / sum(1 for other, _ in columns if other == name) for name, _ in columns])
+    onehot = np.zeros((len(pool), len(columns)))
+    for i, scene in enumerate(pool):
+        canonical = space.canonical(scene)
+        for j, (name, answer) in enumerate(columns):
+            onehot[i, j] = name in canonical and space.features[name].truth(canonical[name]) == answer
+    counts, totals = np.zeros(len(columns)), np.zeros(len(space.names))
+    jitter = rng.uniform(0, 1e-6, len(pool))   # breaks ties without favouring pool order
+    chosen = []
+    for _ in range(n):
+        share = counts / np.maximum(totals[feature_of], 1.0)
+        score = onehot @ (target - share) + jitter
+        score[chosen] = -np.inf
+        pick = int(np.argmax(score))
+        chosen.append(pick)
+        counts += onehot[pick]
+        np.add.at(totals, feature_of, onehot[pick])
+    return [pool[i] for i in chosen]
+
+
+def _uniform_answers(space: SceneSpace, scene: dict, rng: np.random.Generator) -> dict:
+    """The scene with each predicted feature set to a uniformly drawn answer (then a value giving it)."""
+    for feature in space.predicted:
+        by_answer = defaultdict(list)
+        for value in feature.values:
+            by_answer[feature.truth(value)].append(value)
+        answers = sorted(by_answer)
+        values = by_answer[answers[int(rng.integers(len(answers)))]]
+        scene[feature.name] = values[int(rng.integers(len(values)))]
+    return scene
 
 
 def render_examples(space: SceneSpace, scenes: list[dict], renderer, folder: Path, label: str) -> list[Example]:
