@@ -146,7 +146,9 @@ def test_a_run_asks_in_its_prompt_style_and_resumes_in_it(tmp_path):
 
     from isu_validate.commands.run import add_run_options, config_from_args
     from isu_validate.pipeline import build_components
-    from isu_validate.search.loop import _prepare_run_dir
+    from isu_validate.archive.run_file import ResumeMismatch, check_run_dir, write_run_file
+    from isu_validate.commands.run import _mismatch_message
+    from isu_validate.search.loop import _run_file_content
 
     space = load_space()
     parser = argparse.ArgumentParser()
@@ -156,10 +158,14 @@ def test_a_run_asks_in_its_prompt_style_and_resumes_in_it(tmp_path):
         config = config_from_args(parser.parse_args(["--sut", "command:true"] + argv))
         parts = build_components(config.pipeline, space)   # the real renderer (not started), SUT and judge
         assert parts.build_request(space, SCENE, "x.png", "vqa", None).prompt.startswith(opening)
-        _prepare_run_dir(config, resume=False)             # writes run.json as a run does
-    # resuming takes the style from run.json, whatever the command line says now
-    resumed = config_from_args(parser.parse_args(["--out", str(tmp_path / "b"), "--resume", "--prompt-style", "paper"]))
+        write_run_file(config.pipeline.run_dir, _run_file_content(config, space))   # run.json, as a run writes it
+    # resuming takes the style from run.json; another one is refused by name
+    resumed = config_from_args(parser.parse_args(["--out", str(tmp_path / "b"), "--resume"]))
     assert resumed.pipeline.prompt_style == "compact"
+    other = config_from_args(parser.parse_args(["--out", str(tmp_path / "b"), "--resume", "--prompt-style", "paper"]))
+    with pytest.raises(ResumeMismatch) as refused:
+        check_run_dir(tmp_path / "b", other.identity(), space.hash, {}, resume=True)
+    assert "--prompt-style: 'compact' in the stored run, 'paper' now" in _mismatch_message(refused.value)
     with pytest.raises(SystemExit):
         parser.parse_args(["--prompt-style", "poetic"])
     vc = config_from_args(parser.parse_args(["--out", str(tmp_path / "c"), "--mode", "vc", "--sut", "command:true",

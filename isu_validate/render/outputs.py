@@ -10,9 +10,15 @@ import numpy as np
 
 from .camera import PinholePlan, warp
 from .exr import read_exr, write_exr
+from .footprint import unpack_counts
 from .labels import INSTANCES, class_map, semantic_lut
 
 CHANNELS = ("seg", "depth", "exr")
+# What a frame x.png gets beside it (x.seg.png, ...), and the sheet `render --random` adds to a folder:
+# files that are not frames, which image sets (FID/KID) must leave out.
+BESIDE = {"seg": ".seg.png", "semantic": ".semantic.png", "classes": ".seg.json", "depth": ".depth.png",
+          "exr": ".exr", "label": ".label.json"}
+CONTACT_SHEET = "contact_sheet.png"
 
 
 def parse_channels(channels) -> tuple[str, ...]:
@@ -42,9 +48,15 @@ def srgb_encode(linear: np.ndarray) -> np.ndarray:
 def channel_paths(out: Path) -> dict[str, Path]:
     """Where each output goes, beside the image: images/x.png -> images/x.seg.png etc."""
     stem = out.with_suffix("")
-    return {"seg": stem.with_name(stem.name + ".seg.png"), "semantic": stem.with_name(stem.name + ".semantic.png"),
-            "classes": stem.with_name(stem.name + ".seg.json"), "depth": stem.with_name(stem.name + ".depth.png"),
-            "exr": stem.with_name(stem.name + ".exr"), "label": stem.with_name(stem.name + ".label.json")}
+    return {name: stem.with_name(stem.name + suffix) for name, suffix in BESIDE.items()}
+
+
+def by_product(path: str | Path) -> str | None:
+    """What a render output that is not a frame is ("contact sheet", "seg channel"...), or None for a frame."""
+    name = Path(path).name
+    if name == CONTACT_SHEET:
+        return "contact sheet"
+    return next((f"{channel} channel" for channel, suffix in BESIDE.items() if name.endswith(suffix)), None)
 
 
 def write_outputs(exr_path: Path, plan: PinholePlan, out: Path, channels: tuple[str, ...]) -> tuple[dict, dict]:
@@ -84,3 +96,11 @@ def _visibility(ids: np.ndarray) -> dict:
             out[INSTANCES[i][0]] = {"id": i, "pixels": int(n),
                                     "bbox": [int(xs.min()), int(ys.min()), int(xs.max()), int(ys.max())]}
     return out
+
+
+def footprint_pixels(path: Path, plan: PinholePlan, parts: list[str]) -> dict[str, int]:
+    """Pixel count of each part's unoccluded footprint (the worker's packed masks), after the same
+    lens warp as the segmentation."""
+    planes = np.load(path)
+    warped = np.stack([warp(plane, plan, nearest=True) for plane in planes])
+    return dict(zip(parts, unpack_counts(warped, len(parts))))
