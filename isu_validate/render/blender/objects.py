@@ -161,11 +161,11 @@ def build_can(coll, instance: str) -> Group:
     return g
 
 
-# ---------------------------------------------------------------------- what a scene asks for
 def build_phone_lying(coll, instance: str) -> Group:
     return build_phone(coll, instance, screen_on=False)
 
 
+# ---------------------------------------------------------------------- what a scene asks for
 # the things on the co-driver seat: feature -> (asset part, builder); the feature names the instance too
 ON_CODRIVER_SEAT = {"phone_codriver_seat": ("phone", build_phone_lying),
                     "colacan_codriver_seat": ("colacan", build_can),
