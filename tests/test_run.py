@@ -169,8 +169,8 @@ def test_render_and_sut_errors_are_recorded_not_counted_as_failures_and_the_run_
     render_errors = [r for r in records if r.render_error]
     sut_errors = [r for r in records if r.sut_error]
     assert summary.tests == 18 and render_errors and sut_errors
-    assert all(r.canonical["can"] == "YES" and r.image is None and not r.failed for r in render_errors)
-    assert all(r.canonical["cola_bottle"] == "YES" and not r.failed and "502" in r.sut_raw for r in sut_errors)
+    assert all(r.canonical["colacan_codriver_seat"] == "YES" and r.image is None and not r.failed for r in render_errors)
+    assert all(r.canonical["colabottle_codriver_seat"] == "YES" and not r.failed and "502" in r.sut_raw for r in sut_errors)
     assert summary.errors == len(render_errors) + len(sut_errors)
     assert summary.failures == sum(r.failed for r in records) > 0
     out = io.StringIO()
