@@ -53,7 +53,7 @@ def inception_values() -> dict:
 
 def vgg_values() -> dict:
     """VGG19 activations of one fixed image through the style-transfer path (file -> 0..1 ->
-    Caffe BGR minus means -> quantised weights): per layer mean, and Gram matrix norm."""
+    Caffe BGR minus means -> quantised weights): per layer mean, std, Gram norm, first values."""
     import torch
 
     from style_transfer.imageio import load_image
