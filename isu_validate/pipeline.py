@@ -91,14 +91,19 @@ def _load_factory(path: str):
 
 class Pipeline:
     def __init__(self, config: PipelineConfig):
+        """Builds every component, so a bad setting fails here; writes nothing (the run directory
+        may not exist yet: a run checks its pipeline before it writes its first file)."""
         self.config = config
         self.space = load_space(config.space)
         self.run_dir = Path(config.run_dir)
-        for sub in ("images", "labels"):
-            (self.run_dir / sub).mkdir(parents=True, exist_ok=True)
         self.parts: Components = _load_factory(config.factory)(config, self.space)
+        self._dirs_made = False
 
     def evaluate(self, job: Job) -> TestRecord:
+        if not self._dirs_made:
+            for sub in ("images", "labels"):
+                (self.run_dir / sub).mkdir(parents=True, exist_ok=True)
+            self._dirs_made = True
         canonical = self.space.check(job.scene)
         record = TestRecord(test_id=job.test_id, generation=job.generation, index=job.index,
                             algorithm=job.algorithm, seed=job.seed, scene_key=job.scene_key,
@@ -151,9 +156,10 @@ class Pipeline:
         record.details["verdict"] = verdict.details
 
     def close(self) -> None:
-        close = getattr(self.parts.renderer, "close", None)
-        if close:
-            close()
+        for part in (self.parts.renderer, self.parts.sut):
+            close = getattr(part, "close", None)
+            if close:
+                close()
 
 
 def _relative(path, root: Path) -> str:
@@ -168,11 +174,32 @@ def _relative(path, root: Path) -> str:
 _PIPELINES: dict[str, Pipeline] = {}
 
 
-def evaluate_job(config: PipelineConfig, job: Job) -> TestRecord:
-    key = json.dumps(config.to_dict(), sort_keys=True)
+def _key(config: PipelineConfig) -> str:
+    return json.dumps(config.to_dict(), sort_keys=True)
+
+
+def open_pipeline(config: PipelineConfig) -> Pipeline:
+    """This process's pipeline for ``config``, built on first use."""
+    key = _key(config)
     if key not in _PIPELINES:
         _PIPELINES[key] = Pipeline(config)
-    return _PIPELINES[key].evaluate(job)
+    return _PIPELINES[key]
+
+
+def check_pipeline(config: PipelineConfig) -> None:
+    """Build every component once and close them again: raises what a worker would raise."""
+    Pipeline(config).close()
+
+
+def evaluate_job(config: PipelineConfig, job: Job) -> TestRecord:
+    return open_pipeline(config).evaluate(job)
+
+
+def close_pipeline(config: PipelineConfig) -> None:
+    """End this process's pipeline for ``config`` (its renderer's Blender process with it)."""
+    pipeline = _PIPELINES.pop(_key(config), None)
+    if pipeline is not None:
+        pipeline.close()
 
 
 def close_pipelines() -> None:

@@ -1,6 +1,8 @@
 """Test doubles for the pipeline: a renderer that paints the scene hash, a deterministic
 SUT that is wrong in known places, and a weighted exact-match judge.  Used through
-``--pipeline-factory tests.doubles:build`` so runs exercise the real search loop."""
+``--pipeline-factory tests.doubles:build`` so runs exercise the real search loop.
+With ``--sut command:...`` or ``--sut http:...`` the real SUT adapter answers instead of
+the double (real processes and real HTTP, with no Blender in the way)."""
 from __future__ import annotations
 
 import hashlib
@@ -14,10 +16,17 @@ from isu_validate.pipeline import Components
 from isu_validate.protocols import RenderError, RenderResult, SUTRequest, SUTResponse, Verdict
 
 
+# every PaintRenderer closed in this process (a run must close what its workers opened)
+CLOSED: list["PaintRenderer"] = []
+
+
 class PaintRenderer:
     def __init__(self, space):
         self.space = space
         self.calls = 0
+
+    def close(self) -> None:
+        CLOSED.append(self)
 
     def render(self, scene, out: Path) -> RenderResult:
         import cv2
@@ -73,4 +82,10 @@ def build_request(space, scene, image, mode, prompt):
 
 
 def build(config, space) -> Components:
-    return Components(PaintRenderer(space), BlindSUT(space), ExactMatchJudge(config.threshold), build_request)
+    if config.sut.startswith(("command:", "http:")):
+        from isu_validate.sut import open_sut
+        sut = open_sut(config.sut, space=space, repeats=config.repeats, timeout_s=config.sut_timeout_s,
+                       **config.sut_options)
+    else:
+        sut = BlindSUT(space)
+    return Components(PaintRenderer(space), sut, ExactMatchJudge(config.threshold), build_request)

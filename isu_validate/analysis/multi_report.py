@@ -144,7 +144,8 @@ def rq1_part(runs: list[Run]) -> Part:
     stats = comparisons(runs)
     html.append("<h3>Between algorithms: Wilcoxon rank-sum test and Vargha-Delaney A12 on per-run failure rates</h3>")
     html.append(paragraph("A12 > 0.5: algorithm a tends to have the higher failure rate. Magnitude: negligible "
-                          "< 0.56 <= small < 0.64 <= medium < 0.71 <= large (on max(A12, 1 - A12))."))
+                          "< 0.56 <= small < 0.64 <= medium < 0.71 <= large (on max(A12, 1 - A12)); "
+                          "'sample too small' where so few runs cannot show any difference at p < 0.05."))
     shown = [dict(r, threshold=threshold_label(r["threshold"])) for r in stats]
     html.append(table(["sut", "mode", "threshold", "a", "b", "runs_a", "runs_b", "median_a", "median_b", "U", "p",
                        "method", "A12", "magnitude", "note"], shown) if stats

@@ -1,4 +1,4 @@
-"""The tests table of a run as CSV (ARCHITECTURE.md contract), one row per evaluated test."""
+"""The tests table of a run as CSV (a contract, docs/ARCHITECTURE.md), one row per evaluated test."""
 from __future__ import annotations
 
 import csv

@@ -30,13 +30,12 @@ def register(sub) -> None:
 
 
 def run_list(args) -> int:
-    from capture.discovery import list_cameras, none_found_message
+    from capture.discovery import any_camera, list_cameras, none_found_message
     found = list_cameras()
     if args.json:
         print(json.dumps(found, indent=2))
-        return 0
-    entries = found["v4l2"] + found["depthai"] + found["usb"]
-    if not entries:
+        return 0 if any_camera(found) else 1
+    if not any_camera(found):
         print(none_found_message(found))
         return 1
     for e in found["v4l2"]:

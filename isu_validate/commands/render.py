@@ -61,7 +61,8 @@ def run(args) -> int:
                   file=sys.stderr)
     if args.random is not None:
         from ..render.contact import contact_sheet
-        sheet = contact_sheet([out for out, _ in targets], folder / "contact_sheet.png")
+        from ..render.outputs import CONTACT_SHEET
+        sheet = contact_sheet([out for out, _ in targets], folder / CONTACT_SHEET)
         print(f"contact sheet: {sheet}", file=sys.stderr)
     print(f"Blender log: {log_dir}", file=sys.stderr)
     return 0

@@ -58,20 +58,34 @@ def register(sub) -> None:
 
 def run(args) -> int:
     import torch
+
+    from style_transfer.imageio import unreadable
     torch.set_num_threads(max(1, args.threads))
     if args.images[:1] == ["train"]:
         return _train(args)
     jobs = _jobs(args)
     stylise = _gatys_stylist(args) if args.method == "gatys" else _fast_stylist(args)
-    records = []
+    records, skipped = [], []
     for i, (src, dst) in enumerate(jobs, 1):
         start = time.perf_counter()
         # --resume: an interrupted run keeps what it finished (outputs are written atomically)
-        extra = {"resumed": True} if args.resume and dst.is_file() else stylise(src, dst)
+        if args.resume and dst.is_file():
+            extra = {"resumed": True}
+        elif reason := unreadable(src):  # one corrupt input must not cost the others
+            skipped.append({"source": str(src), "reason": reason})
+            print(f"stylize: {i}/{len(jobs)} skipped {src}: cannot read it as an image ({reason})", file=sys.stderr)
+            continue
+        else:
+            extra = stylise(src, dst)
         records.append(_record(src, dst, time.perf_counter() - start, extra))
         print(f"stylize: {i}/{len(jobs)} {dst} ({records[-1]['seconds']:.1f} s, "
               f"SSIM-luma {records[-1]['ssim_luma']:.3f})", file=sys.stderr)
+    if not records:
+        raise ValueError(f"none of the {len(jobs)} input image(s) could be read; see the messages above")
     summary = _summary(records, stylise.settings)
+    if skipped:
+        summary["skipped"] = skipped
+        print(f"stylize: skipped {len(skipped)} unreadable image(s), listed in the report", file=sys.stderr)
     if args.pairs and args.sut:
         summary["answer_flips"] = _flips(args)
     report = (args.pairs / "nst.json") if args.pairs else (args.out / "stylize.json")

@@ -13,7 +13,8 @@ from typing import Any, Mapping
 from ..protocols import SUTRequest, SUTResponse, Verdict
 from ..space import SceneSpace
 from . import similarity, text_metrics
-from .oracles import CAPTION_METRICS, DEFAULT_THRESHOLD, check_conjunction, conjunction_failed, emb_failed
+from .oracles import (CAPTION_METRICS, DEFAULT_THRESHOLD, check_conjunction, check_threshold, conjunction_failed,
+                      emb_failed)
 from .reference_caption import reference_caption
 
 SETTINGS = {**text_metrics.SETTINGS, **similarity.SETTINGS}
@@ -37,7 +38,7 @@ class CaptionJudge:
             if isinstance(threshold, Mapping):
                 raise ValueError("the emb oracle takes one number (fail when F_emb <= it); "
                                  "per-metric thresholds belong to oracle='conjunction'")
-            self.threshold: Any = DEFAULT_THRESHOLD["vc"] if threshold is None else float(threshold)
+            self.threshold: Any = DEFAULT_THRESHOLD["vc"] if threshold is None else check_threshold(threshold)
         elif self.oracle == "conjunction":
             self.threshold = check_conjunction(threshold)
         else:

@@ -14,7 +14,7 @@ from typing import Any, Mapping
 
 from ..protocols import SUTRequest, SUTResponse, Verdict
 from ..space import SceneSpace
-from .oracles import DEFAULT_THRESHOLD, vqa_failed
+from .oracles import DEFAULT_THRESHOLD, check_threshold, vqa_failed
 
 CORRECT, WRONG, MISSING, INVALID = "correct", "wrong", "missing", "invalid"
 
@@ -24,7 +24,7 @@ class VQAJudge:
 
     def __init__(self, space: SceneSpace, threshold: float | None = None):
         self.space = space
-        self.threshold = DEFAULT_THRESHOLD["vqa"] if threshold is None else float(threshold)
+        self.threshold = DEFAULT_THRESHOLD["vqa"] if threshold is None else check_threshold(threshold)
 
     def judge(self, scene: Mapping[str, Any], request: SUTRequest, response: SUTResponse) -> Verdict:
         if response.error:

@@ -5,10 +5,10 @@ A set is written ``DIR`` (a folder of images) or ``PAIRS_DIR:ROLE``.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
-from .images import IMAGE_SUFFIXES, ImageError, list_images
+from .images import IMAGE_SUFFIXES, ImageError, list_frames
 
 ROLES = ("sim", "real", "nst")
 
@@ -17,6 +17,7 @@ ROLES = ("sim", "real", "nst")
 class ImageSet:
     label: str
     paths: list[Path]
+    left_out: list[Path] = field(default_factory=list)  # render by-products in the folder (contact sheet...)
 
 
 def is_pairs_dir(folder: Path) -> bool:
@@ -51,4 +52,4 @@ def resolve_set(spec: str) -> ImageSet:
         return ImageSet(spec, pairs_role(Path(folder), role))
     if is_pairs_dir(path):
         raise ImageError(f"{path} is a pairs directory: name the role, e.g. {spec}:sim or {spec}:real")
-    return ImageSet(spec, list_images(path))
+    return ImageSet(spec, *list_frames(path))

@@ -13,6 +13,11 @@ from .exr import read_exr, write_exr
 from .labels import INSTANCES, class_map, semantic_lut
 
 CHANNELS = ("seg", "depth", "exr")
+# What a frame x.png gets beside it (x.seg.png, ...), and the sheet `render --random` adds to a folder:
+# files that are not frames, which image sets (FID/KID) must leave out.
+BESIDE = {"seg": ".seg.png", "semantic": ".semantic.png", "classes": ".seg.json", "depth": ".depth.png",
+          "exr": ".exr", "label": ".label.json"}
+CONTACT_SHEET = "contact_sheet.png"
 
 
 def parse_channels(channels) -> tuple[str, ...]:
@@ -42,9 +47,15 @@ def srgb_encode(linear: np.ndarray) -> np.ndarray:
 def channel_paths(out: Path) -> dict[str, Path]:
     """Where each output goes, beside the image: images/x.png -> images/x.seg.png etc."""
     stem = out.with_suffix("")
-    return {"seg": stem.with_name(stem.name + ".seg.png"), "semantic": stem.with_name(stem.name + ".semantic.png"),
-            "classes": stem.with_name(stem.name + ".seg.json"), "depth": stem.with_name(stem.name + ".depth.png"),
-            "exr": stem.with_name(stem.name + ".exr"), "label": stem.with_name(stem.name + ".label.json")}
+    return {name: stem.with_name(stem.name + suffix) for name, suffix in BESIDE.items()}
+
+
+def by_product(path: str | Path) -> str | None:
+    """What a render output that is not a frame is ("contact sheet", "seg channel"...), or None for a frame."""
+    name = Path(path).name
+    if name == CONTACT_SHEET:
+        return "contact sheet"
+    return next((f"{channel} channel" for channel, suffix in BESIDE.items() if name.endswith(suffix)), None)
 
 
 def write_outputs(exr_path: Path, plan: PinholePlan, out: Path, channels: tuple[str, ...]) -> tuple[dict, dict]:
