@@ -1,7 +1,7 @@
 """Recompute the pinned reference values deliberately and rewrite ``tests/data/pins/*.json``.
 
     PYTHONPATH=. .venv/bin/python -m tests.update_pins                          # every pin
-    PYTHONPATH=. .venv/bin/python -m tests.update_pins reference_isu            # after retraining the reference ISU
+    PYTHONPATH=. .venv/bin/python -m tests.update_pins reference_isu            # after retraining the shipped reference ISU
     PYTHONPATH=. .venv/bin/python -m tests.update_pins reference_isu --render   # ... for a changed scene space
 
 Prints each value that moves beyond its tolerance as ``old -> new`` before writing, so the
