@@ -15,6 +15,7 @@ from pathlib import Path
 
 from ..archive.run_file import RUN_FILE, ResumeMismatch, read_run_file
 from ..pipeline import PipelineConfig
+from ..render.visibility import DEFAULT_MIN_VISIBLE, parse_min_visible
 from .sut import parse_options
 from ..search import ALGORITHMS, RunConfig, RunError, SUTErrorsStop, run_search
 
@@ -26,6 +27,7 @@ SETTINGS = {
     "threshold": ("pipeline", "threshold"), "prompt": ("pipeline", "prompt"), "repeats": ("pipeline", "repeats"),
     "preset": ("pipeline", "preset"), "camera": ("pipeline", "camera"), "cabin": ("pipeline", "cabin"),
     "channels": ("pipeline", "channels"), "sut_timeout": ("pipeline", "sut_timeout_s"),
+    "extrinsics_from": ("pipeline", "extrinsics_from"), "min_visible": ("pipeline", "min_visible"),
     "sut_option": ("pipeline", "sut_options"), "pipeline_factory": ("pipeline", "factory"),
     "algorithm": ("run", "algorithm"), "pop_size": ("run", "pop_size"), "seed": ("run", "seed"),
     "budget": ("run", "budget_tests"), "budget_time": ("run", "budget_s"), "workers": ("run", "workers"),
@@ -80,6 +82,12 @@ def add_run_options(p) -> None:
     p.add_argument("--repeats", type=int, help=f"ask each scene K times, majority vote (default {d.repeats})")
     p.add_argument("--preset", help=f"render preset: draft | standard | final (default {d.preset})")
     p.add_argument("--camera", help=f"camera rig: shipped name or TOML path (default {d.camera})")
+    p.add_argument("--extrinsics-from", metavar="RIG",
+                   help="take the camera's pose in the cabin from this registered rig (for a calibrated camera "
+                        "file whose pose was never registered); recorded in run.json")
+    p.add_argument("--min-visible", action="append", metavar="SHARE|FEATURE=SHARE",
+                   help="a feature whose parts are seen less than this share is occluded: not judged, counted "
+                        f"apart (default: the space's min_visible, else {DEFAULT_MIN_VISIBLE}); repeatable")
     p.add_argument("--cabin", help=f"cabin rig: shipped name or TOML path (default {d.cabin})")
     p.add_argument("--channels", help="extra render channels, e.g. seg,depth (default none)")
     p.add_argument("--sut-timeout", type=float, help=f"seconds per SUT request (default {d.sut_timeout_s:g})")
@@ -106,6 +114,8 @@ def given_settings(args) -> dict[str, dict]:
             value = tuple(c.strip() for c in value.split(",") if c.strip())
         elif dest == "sut_option":
             value = parse_options(value)
+        elif dest == "min_visible":
+            value = parse_min_visible(value)
         out[part][field] = value
     return out
 
@@ -133,11 +143,19 @@ def _mismatch_message(exc: ResumeMismatch) -> str:
     """The differences in the words the user typed (--seed, not seed)."""
     flags = {(f"pipeline.{field}" if part == "pipeline" else field): "--" + dest.replace("_", "-")
              for dest, (part, field) in SETTINGS.items()}
-    listed = "\n".join(f"  {flags.get(d.setting, d.setting)}: {_shown(d.stored)} in the stored run, "
+    listed = "\n".join(f"  {_flag(d.setting, flags)}: {_shown(d.stored)} in the stored run, "
                        f"{_shown(d.now)} now" for d in exc.differences)
     return (f"{exc.run_dir} holds a run started with other settings:\n{listed}\n"
             "leave these options out to resume it as it was started (or give the stored values), "
             "or start a new run with another --out")
+
+
+def _flag(setting: str, flags: dict) -> str:
+    """--seed for "seed"; an entry of a dict-valued option by its key ("--min-visible luggage")."""
+    if setting in flags:
+        return flags[setting]
+    head, _, key = setting.rpartition(".")
+    return f"{flags[head]} {key}" if head in flags else setting
 
 
 def _shown(value) -> str:

@@ -114,8 +114,11 @@ def _jobs(args) -> list[tuple[Path, Path]]:
     if args.pairs:
         if args.images:
             raise ValueError("give either IMAGES with --out or --pairs DIR, not both")
-        from isu_validate.realism.sets import pairs_role
-        return [(sim, sim.with_name("nst.png")) for sim in pairs_role(args.pairs, "sim")]
+        from isu_validate.pairs import PairsDir
+        samples = [s for s in PairsDir(args.pairs).samples() if s.sim.is_file()]
+        if not samples:
+            raise ValueError(f"pairs directory {args.pairs} has no sim images to stylise")
+        return [(s.sim, s.nst) for s in samples]
     if not args.images or not args.out:
         raise ValueError("stylize needs IMAGES and --out DIR (or --pairs DIR); see isu-validate stylize --help")
     sources = _expand(args.images)
@@ -216,11 +219,10 @@ def _flips(args) -> dict:
     from style_transfer.preservation import answer_flips
     space = load_space(args.space)
     sut = open_sut(args.sut, space=space)
-    samples = []
-    for sim in sorted(args.pairs.glob("*/sim.png")):
-        scene_file = sim.with_name("scene.json")
-        if scene_file.is_file() and sim.with_name("nst.png").is_file():
-            samples.append((json.loads(scene_file.read_text()), sim, sim.with_name("nst.png")))
+    from isu_validate.pairs import PairsDir
+    # the scene comes out of the run's label (scene.json) through the one pairs reader
+    samples = [(s.scene(), s.sim, s.nst) for s in PairsDir(args.pairs).samples()
+               if s.scene_file.is_file() and s.sim.is_file() and s.nst.is_file()]
 
     def ask(scene, image):
         response = sut.query(build_request(space, scene, image, "vqa"))

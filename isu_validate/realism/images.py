@@ -10,7 +10,9 @@ from pathlib import Path
 import numpy as np
 from PIL import Image, UnidentifiedImageError
 
-IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp")
+from ..pairs import IMAGE_SUFFIXES  # one list of the image files every set reader accepts
+
+__all__ = ["IMAGE_SUFFIXES", "ImageError", "list_images", "read_rgb"]
 
 
 class ImageError(ValueError):

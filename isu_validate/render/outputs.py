@@ -10,6 +10,7 @@ import numpy as np
 
 from .camera import PinholePlan, warp
 from .exr import read_exr, write_exr
+from .footprint import unpack_counts
 from .labels import INSTANCES, class_map, semantic_lut
 
 CHANNELS = ("seg", "depth", "exr")
@@ -95,3 +96,11 @@ def _visibility(ids: np.ndarray) -> dict:
             out[INSTANCES[i][0]] = {"id": i, "pixels": int(n),
                                     "bbox": [int(xs.min()), int(ys.min()), int(xs.max()), int(ys.max())]}
     return out
+
+
+def footprint_pixels(path: Path, plan: PinholePlan, parts: list[str]) -> dict[str, int]:
+    """Pixel count of each part's unoccluded footprint (the worker's packed masks), after the same
+    lens warp as the segmentation."""
+    planes = np.load(path)
+    warped = np.stack([warp(plane, plan, nearest=True) for plane in planes])
+    return dict(zip(parts, unpack_counts(warped, len(parts))))

@@ -22,7 +22,7 @@ import numpy as np
 from ..archive import Archive, TestRecord
 from ..archive.run_file import ARCHIVE_FILE, RUN_FILE, RunError, check_run_dir, write_run_file
 from ..execution import make_executor
-from ..pipeline import Job, PipelineConfig
+from ..pipeline import Job, PipelineConfig, check_render_settings
 from ..progress import Progress
 from ..space import load_space
 from .algorithms import make_algorithm
@@ -98,6 +98,7 @@ def run_search(config: RunConfig, resume: bool = False, progress_stream=None) ->
     asked, and SUTErrorsStop (everything evaluated kept) when the SUT keeps failing."""
     config.check()
     space = load_space(config.pipeline.space)
+    check_render_settings(config.pipeline, space)   # an unregistered camera, a bad --min-visible
     run_dir = Path(config.pipeline.run_dir)
     algorithm = make_algorithm(config.algorithm, space, config.pop_size, config.seed)
     new = check_run_dir(run_dir, config.identity(), space.hash,
