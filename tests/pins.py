@@ -71,7 +71,8 @@ def vgg_values() -> dict:
 
 def reference_isu_values() -> dict:
     """The shipped reference ISU asked about each shipped render through the SUT path, judged
-    against the render's label: answers, F_qa, and each head's confidence in its answer."""
+    against the render's label (its occluded features left out, as in a run): answers, F_qa,
+    and each head's confidence in its answer."""
     from isu_validate.evaluate import make_judge
     from isu_validate.reference.backbone import read_rgb
     from isu_validate.space import load_space
@@ -83,10 +84,11 @@ def reference_isu_values() -> dict:
     images = {}
     try:
         for png in reference_renders():
-            scene = space.check(json.loads(label_path(png).read_text())["scene"])
+            label = json.loads(label_path(png).read_text())
+            scene = space.check(label["scene"])
             request = build_request(space, scene, png, "vqa")
             response = sut.query(request)
-            verdict = judge.judge(scene, request, response)
+            verdict = judge.judge(scene, request, response, occluded=label.get("occluded", []))
             model = sut.adapter.model
             features = model.backbone.features([read_rgb(png)])
             images[png.name] = {
