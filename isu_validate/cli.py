@@ -20,6 +20,7 @@ COMMAND_MODULES = [
     "calibrate",  # calibrate IMAGES..., calibrate diff|register
     "recreate",   # recreate RUN...: pairs and printable recreation sheets for a lab
     "agree",      # agree PAIRS: sim/real agreement report; agree votes: validity votes
+    "exposure",   # exposure fit|apply|chart|colour|check (the camera's imaging model)
 ]
 
 

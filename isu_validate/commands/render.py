@@ -17,7 +17,10 @@ def register(sub) -> None:
     p.add_argument("--random", type=int, metavar="N", help="render N random valid scenes instead of a file")
     p.add_argument("--seed", type=int, default=0, help="seed of the random scenes (default 0)")
     p.add_argument("--preset", default="standard", help="draft | standard | final (default standard)")
-    p.add_argument("--rig", default="default", help="camera rig name or .toml path (default: default)")
+    p.add_argument("--rig", "--camera", dest="rig", default="default",
+                   help="camera rig name or .toml path (default: default); a rig with an imaging model "
+                        "([exposure]/[response]/[noise]/[colour], see `isu-validate exposure`) develops the "
+                        "linear render the way that camera would")
     p.add_argument("--extrinsics-from", metavar="RIG",
                    help="take the camera's pose in the cabin from this registered rig (for a calibrated camera "
                         "file whose pose was never registered)")

@@ -81,7 +81,8 @@ def add_run_options(p) -> None:
     p.add_argument("--prompt", help="override the prompt sent to the SUT")
     p.add_argument("--repeats", type=int, help=f"ask each scene K times, majority vote (default {d.repeats})")
     p.add_argument("--preset", help=f"render preset: draft | standard | final (default {d.preset})")
-    p.add_argument("--camera", help=f"camera rig: shipped name or TOML path (default {d.camera})")
+    p.add_argument("--camera", help=f"camera rig: shipped name or TOML path (default {d.camera}); with an imaging "
+                                    "model from `isu-validate exposure`, renders are developed the way that camera would")
     p.add_argument("--extrinsics-from", metavar="RIG",
                    help="take the camera's pose in the cabin from this registered rig (for a calibrated camera "
                         "file whose pose was never registered); recorded in run.json")

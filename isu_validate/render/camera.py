@@ -7,6 +7,9 @@ rig's lens) and calibration (projecting known cabin points). Conventions:
 - ``rotation`` is R_cabin_from_camera: its columns are the camera's OpenCV axes (x right, y down,
   z forward) in cabin coordinates;
 - pixel centres at integer coordinates (OpenCV), so the centre of a 640-wide image is x = 319.5.
+
+The file's optional ``[exposure]``/``[response]``/``[noise]``/``[colour]`` tables are the camera's
+imaging model, parsed by ``capture.camera_model.model`` (the one reader of that part).
 """
 from __future__ import annotations
 
@@ -19,6 +22,9 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+
+from capture.camera_model.model import ImagingModel, ImagingModelError
+from capture.camera_model.model import from_dict as imaging_from_dict
 
 from ..paths import resolve_rig
 from ..tomlfile import read_toml
@@ -48,6 +54,9 @@ class CameraRig:
     extra: dict = field(default_factory=dict, compare=False, hash=False)
     registered: bool = True      # False: [extrinsics] is the placeholder `calibrate` writes before registration
     pose_source: str = ""        # the rig the pose was taken from (--extrinsics-from), "" = this file
+    # the camera's exposure/response/noise/colour model (capture/camera_model), applied to the linear
+    # render after it is warped through the lens; None renders the linear light as sRGB, as before
+    imaging: "ImagingModel | None" = field(default=None, compare=False, hash=False)
 
     # ------------------------------------------------------------------ matrices
     @property
@@ -163,13 +172,17 @@ def camera_from_dict(raw: dict, where: str = "<camera rig>") -> CameraRig:
     if len(position) != 3:
         raise CameraRigError(f"{where}: [extrinsics] position needs 3 numbers (metres), got {list(position)}")
     rotation = _rotation(extr, np.array(position), where)
+    try:
+        imaging = imaging_from_dict(raw, where)
+    except ImagingModelError as exc:
+        raise CameraRigError(str(exc)) from None
     registered = extr.get("registered", True)   # hand-written rigs carry no flag: their pose is meant
     if not isinstance(registered, bool):
         raise CameraRigError(f"{where}: [extrinsics] registered must be true or false, got {registered!r}")
     return CameraRig(str(raw.get("name", Path(where).stem)), width, height, model, fx, fy, cx, cy, dist,
                      position, tuple(tuple(float(v) for v in row) for row in rotation), where,
                      {k: v for k, v in raw.items() if k not in ("name", "image", "intrinsics", "extrinsics")},
-                     registered)
+                     registered, imaging=imaging)
 
 
 def load_render_camera(camera: "str | os.PathLike | CameraRig" = "default",

@@ -59,13 +59,16 @@ def by_product(path: str | Path) -> str | None:
     return next((f"{channel} channel" for channel, suffix in BESIDE.items() if name.endswith(suffix)), None)
 
 
-def write_outputs(exr_path: Path, plan: PinholePlan, out: Path, channels: tuple[str, ...]) -> tuple[dict, dict]:
-    """Write the image and requested channels; return (paths by channel, per-instance visibility)."""
+def write_outputs(exr_path: Path, plan: PinholePlan, out: Path, channels: tuple[str, ...],
+                  develop=srgb_encode) -> tuple[dict, dict]:
+    """Write the image and requested channels; return (paths by channel, per-instance visibility).
+    ``develop`` turns the warped linear RGB into the 8-bit image: sRGB, or the rig camera's imaging
+    model (exposure, response, noise, colour; see ``renderer.BlenderRenderer._develop``)."""
     passes = read_exr(exr_path)
     rgb = np.dstack([_pass(passes, f"Combined.{c}") for c in "RGB"])
     rgb = warp(rgb, plan)
     out.parent.mkdir(parents=True, exist_ok=True)
-    if not cv2.imwrite(str(out), cv2.cvtColor(srgb_encode(rgb), cv2.COLOR_RGB2BGR)):
+    if not cv2.imwrite(str(out), cv2.cvtColor(develop(rgb), cv2.COLOR_RGB2BGR)):
         raise OSError(f"could not write {out}")
     paths, where = {}, channel_paths(out)
     ids = warp(np.rint(_pass(passes, "Index.X")).astype(np.uint16), plan, nearest=True)

@@ -13,13 +13,15 @@ import time
 from pathlib import Path
 from typing import Any, Mapping
 
+from capture.camera_model.apply import apply as apply_imaging
+
 from ..protocols import RenderError, RenderResult
 from ..space import SceneSpace, load_space
 from .cabin import cabin_hash, load_cabin
 from .cache import RenderCache
 from .camera import CameraRig, load_render_camera, pinhole_plan
 from .frame_check import frame_problem, frame_stats
-from .outputs import channel_paths, footprint_pixels, parse_channels, write_outputs
+from .outputs import channel_paths, footprint_pixels, parse_channels, srgb_encode, write_outputs
 from .presets import Preset, get_preset
 from .visibility import feature_visibility, min_visible_for, needed_parts, part_shares
 from .worker import BlenderWorker, WorkerCrashed, WorkerFailed, WorkerTimeout
@@ -57,9 +59,12 @@ class BlenderRenderer:
         self._owner = os.getpid()
         self._count = 0
         self.unrendered = sorted(set(self.space.names) - set(DEFAULTS))
-        self._identity = hashlib.sha256(json.dumps(
-            [RENDERER_VERSION, self.render_rig.hash, cabin_hash(self.cabin), self.preset.to_worker(),
-             self.preset.scale, self.channels, self.parts], sort_keys=True).encode()).hexdigest()
+        self.imaging = self.rig.imaging       # the camera's imaging model; None = linear light as sRGB
+        identity = [RENDERER_VERSION, self.render_rig.hash, cabin_hash(self.cabin), self.preset.to_worker(),
+                    self.preset.scale, self.channels, self.parts]
+        if self.imaging is not None:          # a camera without a model keeps its cache keys
+            identity.append(self.imaging.hash)
+        self._identity = hashlib.sha256(json.dumps(identity, sort_keys=True).encode()).hexdigest()
 
     # ------------------------------------------------------------------ protocol
     def render(self, scene: Mapping[str, Any], out: Path) -> RenderResult:
@@ -71,7 +76,8 @@ class BlenderRenderer:
         out = Path(out)
         canonical = self.space.check(scene)
         key = self.cache_key(canonical)
-        paths, visible, parts, timings, cached = self._frame(canonical, key, out)
+        developed: dict = {}
+        paths, visible, parts, timings, cached = self._frame(canonical, key, out, developed)
         timings["total_s"] = time.perf_counter() - t0
         shares, occluded = feature_visibility(self.space, canonical, parts, self.min_visible)
         frame = frame_stats(out)
@@ -79,26 +85,31 @@ class BlenderRenderer:
         label = channel_paths(out)["label"]
         self._write_label(label, canonical, key, cached, timings, {
             "visible": visible, "parts": parts, "frame": frame, "frame_problem": problem,
-            "visibility": shares, "occluded": occluded, "min_visible": self.min_visible})
+            "visibility": shares, "occluded": occluded, "min_visible": self.min_visible,
+            **({"imaging": {"model": self.imaging.hash, "exposure": developed.get("exposure")}}
+               if self.imaging is not None else {})})
         if problem:
             raise RenderError(f"unusable frame: {problem}", image=out)
         return RenderResult(out, {**paths, "label": label}, timings, cached=cached, visibility=shares,
                             occluded=occluded)
 
-    def _frame(self, canonical: dict, key: str, out: Path):
+    def _frame(self, canonical: dict, key: str, out: Path, developed: dict):
         """(files by channel, visible instances, part shares, timings, cached): from the cache when it
-        holds the scene, else rendered and put there."""
+        holds the scene, else rendered and put there. ``developed`` receives what the camera's imaging
+        model chose (exposure time, gain, metered level)."""
         t0 = time.perf_counter()
         hit = self.cache.get(key, out, channel_paths(out)) if self.cache else None
         if hit:
             timings = {"update_s": 0.0, "render_s": 0.0, "write_s": time.perf_counter() - t0}
+            developed["exposure"] = hit["meta"].get("exposure")
             return hit["channels"], hit["meta"]["visible"], hit["meta"]["parts"], timings, True
         paths, visible, footprints, timings = self._render_with_retry({**DEFAULTS, **canonical}, out, {},
-                                                                      tag=key[:12], parts=self.parts)
+                                                                      tag=key[:12], parts=self.parts,
+                                                                      developed=developed)
         parts = part_shares(visible, footprints)
         if self.cache:
             self.cache.put(key, out, paths, {"scene": canonical, "visible": visible, "parts": parts,
-                                             "timings": timings})
+                                             "timings": timings, "exposure": developed.get("exposure")})
         return paths, visible, parts, timings, False
 
     def close(self) -> None:
@@ -148,11 +159,12 @@ class BlenderRenderer:
                 raise RenderError(f"could not start the Blender worker: {exc}") from exc
         return self._worker
 
-    def _render_with_retry(self, features: dict, out: Path, extras: dict, tag: str, parts=()):
+    def _render_with_retry(self, features: dict, out: Path, extras: dict, tag: str, parts=(),
+                           developed: dict | None = None):
         last = None
         for attempt in (1, 2):
             try:
-                return self._render_once(features, out, extras, tag, list(parts))
+                return self._render_once(features, out, extras, tag, list(parts), developed)
             except (WorkerCrashed, WorkerTimeout) as exc:   # restart and retry once
                 last = exc
                 if self._worker is not None:
@@ -162,7 +174,8 @@ class BlenderRenderer:
                 raise RenderError(f"Blender failed on this scene: {exc} (log: {self.log_path})") from exc
         raise RenderError(f"render failed twice (worker restarted in between): {last}")
 
-    def _render_once(self, features: dict, out: Path, extras: dict, tag: str, parts: list[str]):
+    def _render_once(self, features: dict, out: Path, extras: dict, tag: str, parts: list[str],
+                     developed: dict | None = None):
         worker = self._ensure_worker()
         self._count += 1
         exr = self._tmp / f"frame-{self._count}.exr"
@@ -174,7 +187,8 @@ class BlenderRenderer:
                                 "footprints": parts, "footprint_file": str(masks)}, self.timeout_s)
         t = time.perf_counter()
         try:
-            paths, visible = write_outputs(exr, self.plan, out, self.channels)
+            paths, visible = write_outputs(exr, self.plan, out, self.channels,
+                                           self._developer(tag, {} if developed is None else developed))
             footprints = footprint_pixels(masks, self.plan, parts) if parts else {}
         except (OSError, KeyError, ValueError) as exc:   # unreadable passes or an unwritable output
             raise RenderError(f"could not write the render of this scene to {out}: {exc}") from exc
@@ -186,6 +200,19 @@ class BlenderRenderer:
         if parts:
             timings["footprint_s"] = reply["footprint_s"]
         return paths, visible, footprints, timings
+
+    def _developer(self, tag: str, developed: dict):
+        """The post-render step: linear light through the camera's imaging model (or plain sRGB).
+        Its noise is seeded by the scene's cache key, so a scene renders to the same frame every time."""
+        if self.imaging is None:
+            return srgb_encode
+
+        def develop(rgb):
+            seed = int(hashlib.sha256(tag.encode()).hexdigest()[:8], 16)
+            image, exposure = apply_imaging(rgb, self.imaging, seed=seed)
+            developed["exposure"] = exposure.to_dict() if exposure is not None else None
+            return image
+        return develop
 
     def _write_label(self, path: Path, canonical: dict, key: str, cached: bool, timings: dict, seen: dict):
         label = {"scene": canonical, "space": self.space.name, "preset": self.preset.name,
