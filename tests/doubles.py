@@ -75,6 +75,7 @@ class BlindSUT:
             answers["seat_belt"] = "NO" if answers["seat_belt"] == "YES" else "YES"
         if "luggage_position" in answers:
             answers["luggage_position"] = "BACK"
+        time.sleep(float(os.environ.get("ISU_TEST_SUT_DELAY", "0")))  # tests check the SUT timing with it
         return SUTResponse(raw=repr(answers), answers=answers)
 
 

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from PIL import Image
+from scipy.stats import mannwhitneyu
 
 from isu_validate.analysis import build_report, write_run_report
 from isu_validate.analysis.failures import feature_errors
@@ -23,6 +24,7 @@ from isu_validate.cli import main
 from isu_validate.pipeline import PipelineConfig
 from isu_validate.search import RunConfig, run_search
 from isu_validate.space import load_space
+from tests.test_analysis_stats import brute_force_p
 
 ROOT = Path(__file__).resolve().parent.parent
 FACTORY = "tests.doubles:build"
@@ -143,9 +145,21 @@ def test_report_command_writes_html_and_every_table(runs_root, tmp_path, capsys)
     assert sorted(r["algorithm"] for r in rq1) == ["nsga2", "rs"]
     assert all(r["runs"] == "2" for r in rq1)
     stats = list(csv.DictReader(open(out / "statistics.csv")))
-    assert len(stats) == 6 and all(r["method"] == "exact" for r in stats)
-    failures = sum(len(load_run(p).failures) for p in runs_root.iterdir())
-    assert len(list(csv.DictReader(open(out / "clusters.csv")))) == failures
+    runs = [load_run(p) for p in sorted(runs_root.iterdir())]
+    assert [float(r["threshold"]) for r in stats] == list(runs[0].thresholds)
+    for row in stats:  # each comparison is of the per-run failure rates at its threshold
+        rates = {a: [run_rates(r)[rate_key(float(row["threshold"]))] for r in runs if r.algorithm == a]
+                 for a in (row["a"], row["b"])}
+        x, y = rates[row["a"]], rates[row["b"]]
+        assert (row["a"], row["b"], row["method"]) == ("nsga2", "rs", "exact")
+        assert (float(row["median_a"]), float(row["median_b"])) == pytest.approx((np.median(x), np.median(y)))
+        assert float(row["U"]) == mannwhitneyu(x, y).statistic
+        assert float(row["p"]) == pytest.approx(brute_force_p(np.array(x), np.array(y)))
+        wins = sum((a > b) + 0.5 * (a == b) for a in x for b in y)
+        assert float(row["A12"]) == pytest.approx(wins / (len(x) * len(y)))
+    failing = {(r.name, t.test_id) for r in runs for t in r.failures}
+    clusters = list(csv.DictReader(open(out / "clusters.csv")))
+    assert {(c["run"], c["test_id"]) for c in clusters} == failing and len(clusters) == len(failing)
     assert "k lowered from 500" in html  # k larger than the number of failures
     assert " · cluster " in html  # gallery cards name their RQ2 cluster
     assert html.count("<script>") == 1 and "data:image/png;base64," in html
