@@ -32,21 +32,27 @@ class Example:
 
 def balanced_scenes(space: SceneSpace, n: int, rng: np.random.Generator, pool_factor: int = 6) -> list[dict]:
     """Valid scenes in which each predicted feature's answers are about equally frequent
-    (uniform values would make, e.g., 'no phone in hand' 1 in 11).
+    (uniform values would make, e.g., 'no phone in hand' 1 in 11) wherever the rest of the
+    scene leaves the feature free to take any of them.
 
-    Each candidate draws every predicted feature's answer uniformly, then is repaired; repairs
-    undo answers that constraints make rare (a child seat competes with three things for the
-    co-driver seat), so ``n`` scenes are then chosen greedily from ``pool_factor * n``
-    candidates, each time the one that best lifts the answers seen least so far."""
+    Each candidate draws every predicted feature's answer uniformly, then is repaired; ``n``
+    scenes are then chosen greedily from ``pool_factor * n`` candidates, each time the one that
+    best lifts the answers seen least so far.  A scene counts towards a feature's balance only
+    where the constraints would allow every answer of it: balancing, say, the phone on the
+    co-driver seat over all scenes would need it on every seat free of a child seat, and
+    then together with the can and the bottle (a head could not tell them apart: they were
+    once learnt as one 'something on the seat' head with identical weights)."""
     pool = [space.repair(_uniform_answers(space, scene, rng), rng) for scene in space.sample(rng, n * pool_factor)]
     columns = [(f.name, answer) for f in space.predicted for answer in sorted({f.truth(v) for v in f.values})]
+    column_of = {key: j for j, key in enumerate(columns)}
     feature_of = np.array([space.names.index(name) for name, _ in columns])
     target = np.array([1.0 / sum(1 for other, _ in columns if other == name) for name, _ in columns])
     onehot = np.zeros((len(pool), len(columns)))
     for i, scene in enumerate(pool):
         canonical = space.canonical(scene)
-        for j, (name, answer) in enumerate(columns):
-            onehot[i, j] = name in canonical and space.features[name].truth(canonical[name]) == answer
+        for feature in space.predicted:
+            if feature.name in canonical and _free(space, scene, feature):
+                onehot[i, column_of[(feature.name, feature.truth(canonical[feature.name]))]] = 1.0
     counts, totals = np.zeros(len(columns)), np.zeros(len(space.names))
     jitter = rng.uniform(0, 1e-6, len(pool))   # breaks ties without favouring pool order
     chosen = []
@@ -59,6 +65,12 @@ def balanced_scenes(space: SceneSpace, n: int, rng: np.random.Generator, pool_fa
         counts += onehot[pick]
         np.add.at(totals, feature_of, onehot[pick])
     return [pool[i] for i in chosen]
+
+
+def _free(space: SceneSpace, scene: dict, feature) -> bool:
+    """Whether the constraints let ``feature`` give every one of its answers, the rest of the scene as it is."""
+    allowed = {feature.truth(v) for v in feature.values if space.is_valid({**scene, feature.name: v})}
+    return allowed == {feature.truth(v) for v in feature.values}
 
 
 def _uniform_answers(space: SceneSpace, scene: dict, rng: np.random.Generator) -> dict:
