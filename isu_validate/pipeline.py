@@ -28,6 +28,8 @@ class PipelineConfig:
     mode: str = "vqa"                 # "vqa" or "vc"
     threshold: float | None = None    # oracle threshold; None = the judge's default
     prompt: str | None = None         # None = generated from the space / default caption prompt
+    prompt_style: str = "paper"       # VQA prompt wording: "paper" (Figure 2) or "compact" (sut.prompt)
+    caption_template: str | None = None  # reference-caption template name or file; None = the space's
     repeats: int = 1
     preset: str = "draft"
     camera: str = "default"
@@ -67,6 +69,8 @@ class Components:
 
 def build_components(config: PipelineConfig, space: SceneSpace) -> Components:
     """The real renderer (Blender), SUT adapter and judge."""
+    from functools import partial
+
     from .evaluate import make_judge
     from .render import open_renderer
     from .sut import build_request, open_sut
@@ -78,8 +82,9 @@ def build_components(config: PipelineConfig, space: SceneSpace) -> Components:
                              extrinsics_from=config.extrinsics_from, min_visible=config.min_visible)
     sut = open_sut(config.sut, space=space, repeats=config.repeats, cache_dir=run_dir / "cache" / "sut",
                    timeout_s=config.sut_timeout_s, **config.sut_options)
-    judge = make_judge(config.mode, space, threshold=config.threshold)
-    return Components(renderer, sut, judge, build_request)
+    options = {"template": config.caption_template} if config.mode == "vc" else {}
+    judge = make_judge(config.mode, space, threshold=config.threshold, **options)
+    return Components(renderer, sut, judge, partial(build_request, style=config.prompt_style))
 
 
 def check_render_settings(config: PipelineConfig, space: SceneSpace) -> None:

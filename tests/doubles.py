@@ -32,7 +32,7 @@ class PaintRenderer:
         import cv2
 
         self.calls += 1
-        if os.environ.get("ISU_TEST_FAIL_RENDER_WITH_CAN") and scene.get("can") == "YES":
+        if os.environ.get("ISU_TEST_FAIL_RENDER_WITH_CAN") and scene.get("colacan_codriver_seat") == "YES":
             raise RenderError("Blender failed on this scene (test double)")
         digest = hashlib.sha1(self.space.key(scene).encode()).digest()
         img = np.zeros((24, 32, 3), np.uint8) + np.frombuffer(digest[:3], np.uint8)
@@ -57,7 +57,7 @@ class PaintRenderer:
 
 
 class BlindSUT:
-    """Answers from the label file, wrong about seat belts in low light and about luggage colour."""
+    """Answers from the label file, wrong about seat belts in low light and about luggage on the passenger seat."""
     id = "blind-double"
 
     def __init__(self, space):
@@ -68,13 +68,14 @@ class BlindSUT:
 
         label = json.loads((Path(request.image).parent.parent / "labels" / (Path(request.image).stem + ".json")).read_text())
         scene = label["scene"]
-        if os.environ.get("ISU_TEST_SUT_ERROR_WITH_BOTTLE") and scene.get("cola_bottle") == "YES":
+        if os.environ.get("ISU_TEST_SUT_ERROR_WITH_BOTTLE") and scene.get("colabottle_codriver_seat") == "YES":
             return SUTResponse(raw="<html>502 Bad Gateway</html>", error="HTTP 502 from the SUT (test double)")
         answers = {q.key: q.truth for q in request.questions}
         if scene.get("external_light") == "LOW" and "seat_belt" in answers:
             answers["seat_belt"] = "NO" if answers["seat_belt"] == "YES" else "YES"
-        if "luggage_colour" in answers:
-            answers["luggage_colour"] = "YELLOW"
+        if "luggage_position" in answers:
+            answers["luggage_position"] = "BACK"
+        time.sleep(float(os.environ.get("ISU_TEST_SUT_DELAY", "0")))  # tests check the SUT timing with it
         return SUTResponse(raw=repr(answers), answers=answers)
 
 

@@ -188,7 +188,14 @@ def test_every_number_of_the_summary_by_hand(setup, tmp_path, capsys):
     assert (v["valid"], v["invalid"], v["tied"], v["unvoted"]) == (1, 1, 1, 3) and v["rate"] == pytest.approx(1 / 3)
     assert v["invalid_samples"] == ["S03"] and v["tied_samples"] == ["S02"]
     # FID/KID between 2 renders and 3 photos, with the small-n settings reported
-    assert np.isfinite(s["fid"]) and s["fid"] >= 0 and s["kid_std"] >= 0 and np.isfinite(s["fid_nst"])
+    from isu_validate.realism import FeatureExtractor, fid
+    features = FeatureExtractor(cache=tmp_path / "fcache").features  # the features agree computed above
+    sims = features([pairs / "S01" / "sim.png", pairs / "S02" / "sim.png"])
+    reals = features([pairs / "S01" / "real" / "frame_0000.png", pairs / "S01" / "real" / "frame_0001.png",
+                      pairs / "S02" / "real" / "frame_0000.png"])
+    assert s["fid"] == pytest.approx(fid(sims, reals), rel=1e-9) and s["kid_std"] >= 0
+    assert s["fid_nst"] == pytest.approx(fid(features([pairs / "S01" / "nst.png", pairs / "S02" / "nst.png"]), reals),
+                                         rel=1e-9)
     gap = s["realism"]["sim_vs_real"]
     assert (gap["n_sim"], gap["n_real"]) == (2, 3) and gap["settings"]["kid_subset_size"] == 2
     assert any("below 2048" in w for w in gap["warnings"])

@@ -5,6 +5,7 @@ import json
 import numpy as np
 import pytest
 import torch
+from PIL import Image
 
 from isu_validate.analysis import build_report
 from isu_validate.analysis.embeddings import CLIP_SIZE, make_embedder
@@ -24,13 +25,27 @@ def test_inception_embeddings_drive_the_clusters(tmp_path, monkeypatch):
     except FileNotFoundError as exc:
         pytest.skip(f"no FID Inception weights: {exc}")
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))  # compute, do not reuse features
-    out = build_report([failing_run(tmp_path)], tmp_path / "rep", ReportSettings(embedding="inception", k=2))
+    space = load_space("isu-paper")
+    first, second = space.sample(np.random.default_rng(7), 2)
+    # scenes pair tests 0+1 and 2+3; the images pair 0+2 (noise) and 1+3 (smooth ramps): only the
+    # image embedding can give the second grouping
+    run = make_run(tmp_path / "r", [{"scene": s, "wrong": {"driver_gender": "NONE"}} for s in (first, first, second, second)])
+    rng = np.random.default_rng(0)
+    ramp = np.linspace(0, 255, 64)[None, :, None] * np.ones((48, 1, 3))
+    for i, path in enumerate(sorted((run / "images").glob("*.png"))):
+        pixels = rng.integers(0, 256, (48, 64, 3)) if i % 2 == 0 else ramp + rng.normal(0, 3, ramp.shape)
+        Image.fromarray(np.clip(pixels, 0, 255).astype(np.uint8)).save(path)
+    out = build_report([run], tmp_path / "rep", ReportSettings(embedding="inception", k=2))
     report = json.loads((tmp_path / "rep" / "report.json").read_text())
     assert report["settings"]["embedding"] == "inception"
     assert "InceptionV3" in report["settings"]["embedding_detail"]
-    clusters = report["tables"]["clusters"]
-    assert len(clusters) == 3 and {c["cluster"] for c in clusters} == {0, 1}
+    cluster = [c["cluster"] for c in sorted(report["tables"]["clusters"], key=lambda c: c["test_id"])]
+    assert cluster[0] == cluster[2] != cluster[1] == cluster[3]
     assert "k = 2 (requested 2)" in out.read_text()
+    build_report([run], tmp_path / "rep-scene", ReportSettings(embedding="scene", k=2))
+    by_scene = json.loads((tmp_path / "rep-scene" / "report.json").read_text())["tables"]["clusters"]
+    cluster = [c["cluster"] for c in sorted(by_scene, key=lambda c: c["test_id"])]
+    assert cluster[0] == cluster[1] != cluster[2] == cluster[3]
 
 
 class MeanColour(torch.nn.Module):
@@ -63,11 +78,11 @@ def test_clip_file_that_is_not_torchscript_is_refused(tmp_path):
 def test_scene_embedding_marks_inactive_features():
     space = load_space("isu-paper")
     scene = space.sample(np.random.default_rng(0), 1)[0]
-    scene.update(luggage="NO", child_seat="NO")
+    scene.update(luggage="NO", child_seat="NO", external_light="MEDIUM")
     vector = make_embedder("scene").embed_scenes(space, [space.canonical(scene)])[0]
     names = list(space.features)
     assert vector[names.index("luggage_colour")] == -1.0
-    assert 0.0 <= vector[names.index("external_light")] <= 1.0
+    assert vector[names.index("external_light")] == 0.5   # MEDIUM of LOW, MEDIUM, HIGH
 
 
 def test_clip_option_loads_an_exported_program(tmp_path):

@@ -20,9 +20,9 @@ SCENE = {"driver_gender": "FEMALE", "driver_emotion": "HAPPY", "driver_height": 
          "phone_position": "NONE", "seat_belt": "YES", "tshirt_colour": "WHITE", "child_seat": "YES", "child": "NO",
          "child_seat_orientation": "REAR_FACING", "car_lights": "OFF", "external_light": "HIGH", "luggage": "YES",
          "luggage_orientation": 90.0, "luggage_position": "BACK", "luggage_colour": "ANTHRACITE",
-         "phone": "NO", "cola_bottle": "YES", "can": "NO"}
+         "phone_codriver_seat": "NO", "colacan_codriver_seat": "NO", "colabottle_codriver_seat": "NO"}
 GOOD = ("A smiling woman in a white T-shirt drives with her seat belt on. An empty rear-facing child seat is on "
-        "the passenger seat and a dark grey suitcase lies on the back seat. There is a cola bottle.")
+        "the passenger seat and a dark grey suitcase lies on the back seat.")
 
 
 @pytest.fixture(scope="module")
@@ -90,8 +90,8 @@ def test_other_language_scores_low_but_defined(space):
     german = ("Eine lächelnde Frau in einem weißen T-Shirt fährt angeschnallt. Ein leerer Kindersitz steht auf dem "
               "Beifahrersitz, ein grauer Koffer liegt auf der Rückbank.")
     ours, theirs = caption_metrics(GOOD, reference_caption(space, SCENE)), caption_metrics(german, reference_caption(space, SCENE))
-    assert all(0.0 <= theirs[m] <= 1.0 for m in ("f_bleu", "f_meteor"))
-    assert theirs["f_emb"] < ours["f_emb"] and theirs["f_bleu"] < 0.05
+    assert theirs["f_meteor"] < 0.1 < ours["f_meteor"] and theirs["f_emb"] < ours["f_emb"]
+    assert theirs["f_bleu"] < 0.05
     assert all(math.isfinite(v) for v in theirs.values())
 
 
@@ -103,7 +103,10 @@ def test_ten_thousand_word_caption(space):
     verdict = make_judge("vc", space).judge(SCENE, request, SUTResponse(caption=caption))
     assert time.perf_counter() - start < 20
     assert verdict.details["truncated"] is True
-    assert all(math.isfinite(v) and -1.0 <= v <= 1.0 for v in verdict.fitness.values())
+    # the embedding sees the first 256 tokens only: the same as for the first 400 words
+    assert verdict.fitness["f_emb"] == pytest.approx(f_emb(" ".join(words[:400]), reference_caption(space, SCENE)),
+                                                     abs=1e-6)
+    assert all(math.isfinite(v) for v in verdict.fitness.values())
     assert verdict.fitness["f_bleu"] < 0.05  # the brevity penalty does not reward length, precision collapses
 
 
@@ -138,7 +141,7 @@ def test_repeated_captions_are_averaged(space):
     verdict = make_judge("vc", space).judge(SCENE, request, SUTResponse(caption=GOOD, extra={"captions": captions}))
     one = [caption_metrics(c, reference_caption(space, SCENE)) for c in captions]
     assert verdict.fitness["f_bleu"] == pytest.approx((one[0]["f_bleu"] + one[1]["f_bleu"]) / 2)
-    assert 0 < verdict.details["consistency"] < 1 and len(verdict.details["per_caption"]) == 2
+    assert verdict.details["consistency"] == pytest.approx(f_emb(*captions)) and len(verdict.details["per_caption"]) == 2
 
 
 def test_sut_error_is_not_a_failure(space):
@@ -148,15 +151,31 @@ def test_sut_error_is_not_a_failure(space):
 
 
 # ---------------------------------------------------------------- reference caption
-def test_reference_caption_uses_only_active_features(space):
+def test_reference_caption_follows_the_papers_template_with_only_active_features(space):
     text = reference_caption(space, SCENE)
-    assert text == ("The image shows the inside of a car in bright daylight. A female driver in a white T-shirt "
-                    "looks happy and is wearing a seat belt. An empty rear-facing child seat is on the front "
-                    "passenger seat. An anthracite suitcase lies on the back seat. A cola bottle lies in the car.")
-    bare = dict(SCENE, child_seat="NO", luggage="NO", cola_bottle="NO", car_lights="ON", external_light="LOW")
+    assert text == ("The image is taken from inside a car parked in a courtyard in daylight. A happy female driver "
+                    "wearing a white T-shirt is seated in the car. The driver is wearing a safety belt. An "
+                    "anthracite suitcase is visible on the rear seat. An empty rear-facing baby seat is positioned "
+                    "on the front passenger seat.")
+    bare = dict(SCENE, child_seat="NO", luggage="NO", colacan_codriver_seat="YES", phone_position="P3",
+                car_lights="ON", external_light="LOW")
     text = reference_caption(space, bare)  # latent luggage colour and child-seat values are still in the dict
-    assert "suitcase" not in text and "anthracite" not in text and "child" not in text
-    assert "at night with the cabin lights on." in text
+    assert "suitcase" not in text and "anthracite" not in text and "baby" not in text
+    assert "parked in a courtyard at night with the interior lights on." in text
+    assert text.endswith("The driver is holding a phone in the hand. A cola can is visible on the front passenger seat.")
+
+
+def test_earlier_caption_wording_is_kept_by_name_and_a_wrong_template_is_named(space, tmp_path):
+    text = reference_caption(space, dict(SCENE, child_seat="NO", phone_codriver_seat="YES"), "isu-paper-compact")
+    assert text == ("The image shows the inside of a car in bright daylight. A female driver in a white T-shirt "
+                    "looks happy and is wearing a seat belt. An anthracite suitcase lies on the back seat. "
+                    "A mobile phone lies on the front passenger seat.")
+    with pytest.raises(SpaceError, match="caption template 'isu-paper-fancy' not found.*isu-paper-compact"):
+        make_judge("vc", space, template="isu-paper-fancy")
+    other = tmp_path / "other.toml"
+    other.write_text('space = "trucks"\n[[sentences]]\ntext = "A truck."\n')
+    with pytest.raises(SpaceError, match="for space 'trucks', not for 'isu-paper'"):
+        reference_caption(space, SCENE, other)
 
 
 def test_template_errors_name_the_problem(space):

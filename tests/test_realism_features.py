@@ -41,8 +41,9 @@ def paths(folder):
 def test_black_and_saturated_frames_give_finite_distinct_features(extractor, images):
     black, white = extractor.features(paths(images["black"])), extractor.features(paths(images["white"]))
     assert black.shape == (2, 2048) and np.isfinite(black).all() and np.isfinite(white).all()
-    value = fid(black, white)  # both covariances are zero: the singular extreme
-    assert np.isfinite(value) and value > 1.0
+    value = fid(black, white)  # both covariances are zero: the singular extreme, FID = squared mean distance
+    assert np.allclose(black, black[0]) and np.allclose(white, white[0])
+    assert value == pytest.approx(float(((black[0] - white[0]) ** 2).sum()), rel=1e-9) and value > 1.0
     assert fid(black, black) == pytest.approx(0.0, abs=1e-9)
 
 
@@ -82,7 +83,8 @@ def test_command_json_and_errors(images, extractor, tmp_path, capsys):
             "--bootstrap", "20", "--kid-subsets", "10", "--threads", "2"]
     assert main(args) == 0
     out = json.loads(capsys.readouterr().out)
-    assert out["n_a"] == 3 and out["fid"] > 0 and len(out["fid_ci"]) == 2
+    expected = fid(extractor.features(paths(images["noise"])), extractor.features(paths(images["gradient"])))
+    assert out["n_a"] == 3 and out["fid"] == pytest.approx(expected, rel=1e-9) and len(out["fid_ci"]) == 2
     assert out["settings"]["resize_filter"] == "bicubic" and out["settings"]["kid_subset_size"] == 3
     assert main([*args, "--kid-subset-size", "4"]) == 2
     assert "exceeds the smaller set (3 images)" in capsys.readouterr().err

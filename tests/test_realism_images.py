@@ -17,9 +17,13 @@ def save(path, array, mode=None):
 @pytest.mark.parametrize("mode", ["L", "RGBA", "P", "LA", "1"])
 def test_any_mode_becomes_rgb_float(tmp_path, mode):
     rgb = np.random.default_rng(0).integers(0, 256, (10, 14, 3), dtype=np.uint8)
-    out = read_rgb(save(tmp_path / "x.png", rgb, mode))
+    path = save(tmp_path / "x.png", rgb, mode)
+    out = read_rgb(path)
     assert out.shape == (10, 14, 3) and out.dtype == np.float32
-    assert 0 <= out.min() and out.max() <= 255
+    with Image.open(path) as img:  # alpha dropped, palette looked up, grey copied to R, G and B
+        assert np.array_equal(out, np.asarray(img.convert("RGB"), np.float32))
+    if mode in ("L", "LA", "1"):
+        assert np.array_equal(out[..., 0], out[..., 2])
 
 
 def test_sixteen_bit_grey_scales_to_0_255(tmp_path):

@@ -118,6 +118,21 @@ def test_the_checklist_has_only_active_features_in_words_with_cabin_measurements
         space_from_dict({"features": {"a": {"type": "categorical", "values": ["X"], "describe": {"Y": "why"}}}})
 
 
+def test_the_things_on_the_co_driver_seat_are_placed_where_the_rig_renders_them():
+    from isu_validate.render.cabin import load_cabin
+    space, cabin = load_space(), load_cabin("default")
+    scene = {**space.sample(np.random.default_rng(0), 1)[0], "child_seat": "NO", "luggage": "NO",
+             "phone_codriver_seat": "YES", "colacan_codriver_seat": "YES", "colabottle_codriver_seat": "NO"}
+    items = {i.feature: i for i in checklist(space, scene, cabin)}
+    phone = items["phone_codriver_seat"]
+    spot = cabin["codriver_seat"]["phone_codriver_seat"]
+    assert phone.title == "K1 phone on the co-driver seat" and "screen up" in phone.text
+    assert phone.placement.point == tuple(spot["position"]) and phone.placement.angle_deg == spot["rotation_deg"][2]
+    assert phone.crop_parts == ("phone_codriver_seat",)
+    assert items["colacan_codriver_seat"].placement.point == tuple(cabin["codriver_seat"]["colacan_codriver_seat"]["position"])
+    assert items["colabottle_codriver_seat"].placement is None   # NO: nothing to place
+
+
 def test_recreate_writes_pairs_sheets_and_the_effort_against_the_run_order(run_dir, tmp_path, capsys):
     out = tmp_path / "pairs"
     assert main(["recreate", str(run_dir), "--select", "mixed", "--n", "6", "--seed", "3", "--out", str(out),
@@ -133,7 +148,8 @@ def test_recreate_writes_pairs_sheets_and_the_effort_against_the_run_order(run_d
         assert (sample / "sim.png").is_file() and (sample / "camera.toml").is_file()
         sheet = (sample / "sheet.html").read_text()
         scene = json.loads(label.read_text())["scene"]
-        assert ("luggage colour" in sheet) == ("luggage_colour" in scene)
+        colour = load_space().features["luggage_colour"].display_name   # the space's own words for it
+        assert (colour in sheet) == ("luggage_colour" in scene)
         assert 'src="sim.png"' in sheet
     index = (out / "index.html").read_text()
     assert index.count('class="sheet"') == 6 and "@page{size:A4" in index and "in the run&#x27;s order" in index

@@ -33,9 +33,10 @@ pytestmark = pytest.mark.blender
 LIT = {"driver_gender": "MALE", "driver_emotion": "HAPPY", "driver_height": "H2", "driver_weight": "W2",
        "phone_position": "NONE", "seat_belt": "YES", "tshirt_colour": "WHITE", "child_seat": "NO",
        "car_lights": "OFF", "external_light": "HIGH", "luggage": "YES", "luggage_orientation": 20.0,
-       "luggage_position": "BACK", "luggage_colour": "YELLOW", "phone": "NO", "cola_bottle": "NO", "can": "NO"}
+       "luggage_position": "BACK", "luggage_colour": "YELLOW", "phone_codriver_seat": "NO",
+       "colacan_codriver_seat": "NO", "colabottle_codriver_seat": "NO"}
 BEHIND_CHILD_SEAT = {**LIT, "child_seat": "YES", "child": "NO", "child_seat_orientation": "FRONT_FACING"}
-PHONE_BEFORE_FACE = {**LIT, "phone": "YES", "phone_position": "P1"}
+PHONE_BEFORE_FACE = {**LIT, "phone_position": "P1"}
 SUITCASE = ["luggage", "luggage_position", "luggage_colour"]
 
 

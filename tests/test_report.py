@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from PIL import Image
+from scipy.stats import mannwhitneyu
 
 from isu_validate.analysis import build_report, write_run_report
 from isu_validate.analysis.failures import feature_errors
@@ -23,6 +24,7 @@ from isu_validate.cli import main
 from isu_validate.pipeline import PipelineConfig
 from isu_validate.search import RunConfig, run_search
 from isu_validate.space import load_space
+from tests.test_analysis_stats import brute_force_p
 
 ROOT = Path(__file__).resolve().parent.parent
 FACTORY = "tests.doubles:build"
@@ -104,8 +106,8 @@ def test_failure_analysis_finds_the_doubles_known_faults(runs_root):
     runs = [load_run(p) for p in sorted(runs_root.iterdir())]
     rows, pairs = feature_errors(runs)
     wrong = {r["feature"] for r in rows if r["wrong"]}
-    assert wrong == {"seat_belt", "luggage_colour"}  # the double errs about nothing else
-    assert {(p["truth"], p["answer"]) for p in pairs if p["feature"] == "luggage_colour"} == {("ANTHRACITE", "YELLOW")}
+    assert wrong == {"seat_belt", "luggage_position"}  # the double errs about nothing else
+    assert {(p["truth"], p["answer"]) for p in pairs if p["feature"] == "luggage_position"} == {("PASSENGER", "BACK")}
     for run in runs:  # seat belts are misread only in low external light
         for record in run.valid:
             misread = record.answers["seat_belt"] != run.truth(record)["seat_belt"]
@@ -113,7 +115,7 @@ def test_failure_analysis_finds_the_doubles_known_faults(runs_root):
     tests = [r for run in runs for r in run.valid]
     rules = {r["rule"]: r for r in failure_regions(runs[0].space, [t.canonical for t in tests],
                                                    [t.failed for t in tests])}
-    for fault in ("external_light = LOW", "luggage_colour = ANTHRACITE"):  # the tree isolates both faults
+    for fault in ("external_light = LOW", "luggage_position = PASSENGER"):  # the tree isolates both faults
         assert any(fault in rule and r["precision"] == 1.0 for rule, r in rules.items()), rules
     assert sum(r["failing"] for r in rules.values()) == sum(t.failed for t in tests)
 
@@ -143,9 +145,21 @@ def test_report_command_writes_html_and_every_table(runs_root, tmp_path, capsys)
     assert sorted(r["algorithm"] for r in rq1) == ["nsga2", "rs"]
     assert all(r["runs"] == "2" for r in rq1)
     stats = list(csv.DictReader(open(out / "statistics.csv")))
-    assert len(stats) == 6 and all(r["method"] == "exact" for r in stats)
-    failures = sum(len(load_run(p).failures) for p in runs_root.iterdir())
-    assert len(list(csv.DictReader(open(out / "clusters.csv")))) == failures
+    runs = [load_run(p) for p in sorted(runs_root.iterdir())]
+    assert [float(r["threshold"]) for r in stats] == list(runs[0].thresholds)
+    for row in stats:  # each comparison is of the per-run failure rates at its threshold
+        rates = {a: [run_rates(r)[rate_key(float(row["threshold"]))] for r in runs if r.algorithm == a]
+                 for a in (row["a"], row["b"])}
+        x, y = rates[row["a"]], rates[row["b"]]
+        assert (row["a"], row["b"], row["method"]) == ("nsga2", "rs", "exact")
+        assert (float(row["median_a"]), float(row["median_b"])) == pytest.approx((np.median(x), np.median(y)))
+        assert float(row["U"]) == mannwhitneyu(x, y).statistic
+        assert float(row["p"]) == pytest.approx(brute_force_p(np.array(x), np.array(y)))
+        wins = sum((a > b) + 0.5 * (a == b) for a in x for b in y)
+        assert float(row["A12"]) == pytest.approx(wins / (len(x) * len(y)))
+    failing = {(r.name, t.test_id) for r in runs for t in r.failures}
+    clusters = list(csv.DictReader(open(out / "clusters.csv")))
+    assert {(c["run"], c["test_id"]) for c in clusters} == failing and len(clusters) == len(failing)
     assert "k lowered from 500" in html  # k larger than the number of failures
     assert " · cluster " in html  # gallery cards name their RQ2 cluster
     assert html.count("<script>") == 1 and "data:image/png;base64," in html
@@ -223,9 +237,10 @@ def test_vqa_thresholds_fail_strictly_below(tmp_path):
     space = load_space("isu-paper")
     rng = np.random.default_rng(4)
     scenes = [s for s in space.sample(rng, 40) if s["child_seat"] == "NO" and s["luggage"] == "NO"][:2]
-    # weights of the always-asked questions sum to 1.1: one wrong 0.05-weight answer gives 1.05/1.1
-    run = load_run(make_run(tmp_path / "r", [{"scene": scenes[0], "wrong": {"can": "NO" if scenes[0]["can"] == "YES"
-                                                                                  else "YES"}}, {"scene": scenes[1]}]))
+    # weights of the always-asked questions sum to 0.7: one wrong 0.05-weight answer gives 0.65/0.7
+    can = "colacan_codriver_seat"
+    run = load_run(make_run(tmp_path / "r", [{"scene": scenes[0], "wrong": {can: "NO" if scenes[0][can] == "YES"
+                                                                              else "YES"}}, {"scene": scenes[1]}]))
     row = run_rates(run)
     assert row[rate_key(1.0)] == 50.0 and row[rate_key(0.9)] == 0.0
 
@@ -251,7 +266,7 @@ def test_runs_of_different_spaces_are_not_mixed(tmp_path):
 
 
 def test_comparison_with_an_algorithm_without_verdicts_says_why(tmp_path):
-    a = make_run(tmp_path / "a", [{"wrong": {"can": "NONE"}}, {}], algorithm="nsga2")
+    a = make_run(tmp_path / "a", [{"wrong": {"colacan_codriver_seat": "NONE"}}, {}], algorithm="nsga2")
     b = make_run(tmp_path / "b", [{"sut_error": "refused"}], algorithm="rs")
     rows = comparisons([load_run(a), load_run(b)])
     assert rows and all(r["method"] == "undefined" for r in rows)
@@ -259,7 +274,7 @@ def test_comparison_with_an_algorithm_without_verdicts_says_why(tmp_path):
 
 
 def test_runs_with_the_same_folder_name_get_distinct_names(tmp_path):
-    a = make_run(tmp_path / "exp1" / "rs-1", [{"wrong": {"can": "NONE"}}])
+    a = make_run(tmp_path / "exp1" / "rs-1", [{"wrong": {"colacan_codriver_seat": "NONE"}}])
     b = make_run(tmp_path / "exp2" / "rs-1", [{}], seed=2)
     build_report([a, b], tmp_path / "rep", ReportSettings(embedding="scene"))
     names = [r["run"] for r in csv.DictReader(open(tmp_path / "rep" / "runs.csv"))]
@@ -268,7 +283,8 @@ def test_runs_with_the_same_folder_name_get_distinct_names(tmp_path):
 
 def test_gallery_lets_runs_take_turns_among_equal_failures(tmp_path):
     from isu_validate.analysis.gallery import pick
-    runs = [load_run(make_run(tmp_path / name, [{"wrong": {"driver_gender": "NONE"}}] * 4, seed=i))
+    scene = load_space("isu-paper").sample(np.random.default_rng(0), 1)[0]   # one scene: equal fitness by design
+    runs = [load_run(make_run(tmp_path / name, [{"scene": scene, "wrong": {"driver_gender": "NONE"}}] * 4, seed=i))
             for i, name in enumerate(["a", "b"])]
     chosen = pick([(run, rec) for run in runs for rec in run.failures], limit=4)
     assert [run.name for run, _ in chosen] == ["a", "b", "a", "b"]

@@ -19,6 +19,7 @@ from isu_validate.archive.export import write_csv
 from isu_validate.cli import main
 from isu_validate.pipeline import PipelineConfig
 from isu_validate.search import RunConfig, RunError, run_search
+from isu_validate.space import load_space
 
 from tests import doubles
 
@@ -39,16 +40,27 @@ def records_of(run_dir):
         archive.close()
 
 
-def test_a_run_commits_every_test_with_image_label_and_verdict(tmp_path):
+def expected_f_qa(space, canonical) -> float:
+    """What the blind double's answers score: seat belts misread in low light, luggage always yellow."""
+    questions = space.questions(canonical)
+    wrong = {q.key for q in questions if (q.key == "seat_belt" and canonical["external_light"] == "LOW")
+             or (q.key == "luggage_colour" and q.truth != "YELLOW")}
+    return sum(q.weight for q in questions if q.key not in wrong) / sum(q.weight for q in questions)
+
+
+def test_a_run_commits_every_test_with_image_label_and_verdict(tmp_path, monkeypatch):
+    monkeypatch.setenv("ISU_TEST_RENDER_DELAY", "0.03")  # each stage takes at least this long
+    monkeypatch.setenv("ISU_TEST_SUT_DELAY", "0.02")
     summary = run_search(config(tmp_path / "run"))
     records = records_of(tmp_path / "run")
+    space = load_space()
     assert summary.tests == len(records) == 24 and summary.generations == 4
     for r in records.values():
         assert (tmp_path / "run" / r.image).exists()
         label = json.loads((tmp_path / "run" / "labels" / f"{r.test_id}.json").read_text())
         assert label["scene"] == r.canonical
-        assert 0.0 <= r.primary <= 1.0 and r.failed == (r.primary < 1.0)
-        assert r.timings["sut_s"] >= 0 and r.timings["render_s"] >= 0
+        assert r.primary == pytest.approx(expected_f_qa(space, r.canonical)) and r.failed == (r.primary < 1.0)
+        assert r.timings["render_s"] >= 0.03 and r.timings["sut_s"] >= 0.02 and r.timings["update_s"] == 0.0
     assert summary.failures == sum(r.failed for r in records.values()) > 0
     run = json.loads((tmp_path / "run" / "run.json").read_text())
     assert run["space_hash"] and run["versions"]["pymoo"] == "0.6.2" and run["config"]["seed"] == 5
@@ -154,7 +166,14 @@ def test_cli_run_and_export(tmp_path, capsys, monkeypatch):
                  "--pop-size", "3", "--no-report"]) == 0
     assert "6 tests" in capsys.readouterr().out
     assert main(["export", str(tmp_path / "r"), "--out", str(tmp_path / "t.csv")]) == 0
-    assert len((tmp_path / "t.csv").read_text().splitlines()) == 7
+    rows = list(csv.DictReader((tmp_path / "t.csv").open()))
+    records = records_of(tmp_path / "r")
+    assert [r["test_id"] for r in rows] == sorted(records) and len(rows) == 6
+    for row in rows:  # the row is its archived test: scene, answers, verdict
+        record = records[row["test_id"]]
+        assert float(row["f_qa"]) == pytest.approx(record.fitness["f_qa"], abs=1e-6)
+        assert row["failed"] == str(int(record.failed)) and row["x.seat_belt"] == record.canonical["seat_belt"]
+        assert row["y.seat_belt"] == record.answers["seat_belt"]
     assert main(["export", str(tmp_path / "nothing")]) == 2
     assert "not a run directory" in capsys.readouterr().err
     assert main(["run", "--out", str(tmp_path / "bad"), "--space", "nope", "--pipeline-factory", FACTORY]) == 2
@@ -169,8 +188,8 @@ def test_render_and_sut_errors_are_recorded_not_counted_as_failures_and_the_run_
     render_errors = [r for r in records if r.render_error]
     sut_errors = [r for r in records if r.sut_error]
     assert summary.tests == 18 and render_errors and sut_errors
-    assert all(r.canonical["can"] == "YES" and r.image is None and not r.failed for r in render_errors)
-    assert all(r.canonical["cola_bottle"] == "YES" and not r.failed and "502" in r.sut_raw for r in sut_errors)
+    assert all(r.canonical["colacan_codriver_seat"] == "YES" and r.image is None and not r.failed for r in render_errors)
+    assert all(r.canonical["colabottle_codriver_seat"] == "YES" and not r.failed and "502" in r.sut_raw for r in sut_errors)
     assert summary.errors == len(render_errors) + len(sut_errors)
     assert summary.failures == sum(r.failed for r in records) > 0
     out = io.StringIO()

@@ -19,11 +19,30 @@ def write(tmp_path, body: str):
 def test_default_space_has_the_papers_features():
     expected = {"driver_gender", "driver_emotion", "phone_position", "driver_weight", "driver_height", "seat_belt",
                 "tshirt_colour", "child_seat", "child", "child_seat_orientation", "car_lights", "external_light",
-                "luggage", "luggage_orientation", "luggage_position", "luggage_colour", "phone", "cola_bottle", "can"}
+                "luggage", "luggage_orientation", "luggage_position", "luggage_colour", "phone_codriver_seat",
+                "colacan_codriver_seat", "colabottle_codriver_seat"}
     assert set(SPACE.names) == expected
     assert SPACE.features["phone_position"].values == ("NONE",) + tuple(f"P{i}" for i in range(1, 11))
     assert SPACE.features["luggage_orientation"].low == 20 and SPACE.features["luggage_orientation"].high == 140
-    assert all(f.weight > 0 for f in SPACE.predicted)
+
+
+def test_default_space_weighs_as_the_papers_table_3_and_labels_k1_to_k12():
+    weights = {f.name: f.weight for f in SPACE.predicted}
+    assert {n for n, w in weights.items() if w == 0.05} == {
+        "driver_gender", "driver_emotion", "colabottle_codriver_seat", "colacan_codriver_seat"}
+    assert {n for n, w in weights.items() if w == 0.10} == {
+        "phone_position", "seat_belt", "luggage", "luggage_position", "phone_codriver_seat", "child_seat",
+        "child_seat_orientation", "child"}
+    # Table 3 leaves the colours out: asked, weight 0
+    assert {n for n, w in weights.items() if w == 0} == {"tshirt_colour", "luggage_colour"}
+    assert sum(weights.values()) == pytest.approx(1.0)
+    k = {f.label.split()[0]: f.name for f in SPACE.predicted if f.label.startswith("K")}
+    assert sorted(k, key=lambda s: int(s[1:])) == [f"K{i}" for i in range(1, 13)]
+    assert (k["K1"], k["K4"], k["K5"], k["K8"]) == (
+        "phone_codriver_seat", "colacan_codriver_seat", "colabottle_codriver_seat", "phone_position")
+    assert all(f.display_name == f.label for f in SPACE.features.values())
+    plain = space_from_dict({"features": {"a": {"type": "categorical", "values": ["X"]}}})
+    assert plain.features["a"].display_name == "a"
 
 
 def test_inactive_features_are_dropped_from_canonical_form_questions_and_key():
@@ -39,7 +58,7 @@ def test_inactive_features_are_dropped_from_canonical_form_questions_and_key():
 
 def test_truth_mapping_and_questions():
     scene = SPACE.sample(np.random.default_rng(1), 1)[0]
-    scene.update(phone_position="P3", phone="YES")
+    scene.update(phone_position="P3")
     truth = {q.key: q.truth for q in SPACE.questions(scene)}
     assert truth["phone_position"] == "YES"
     scene.update(phone_position="NONE")
@@ -51,11 +70,19 @@ def test_constraints_are_checked():
     scene.update(child_seat="YES", child="YES", child_seat_orientation="FRONT_FACING", luggage="YES",
                  luggage_position="PASSENGER", luggage_colour="YELLOW", luggage_orientation=50.0)
     assert any("same seat" in p for p in SPACE.violations(scene))
-    scene.update(luggage="NO")  # an absent suitcase is on no seat
+    scene.update(luggage="NO", phone_codriver_seat="NO", colacan_codriver_seat="NO",
+                 colabottle_codriver_seat="NO")  # an absent suitcase is on no seat
     assert SPACE.is_valid(scene)
-    scene.update(phone_position="P1", phone="NO")
-    with pytest.raises(SpaceError, match="requires a phone"):
-        SPACE.check(scene)
+    for thing in ("phone_codriver_seat", "colacan_codriver_seat", "colabottle_codriver_seat"):
+        with pytest.raises(SpaceError, match="co-driver seat needs the seat free"):
+            SPACE.check(dict(scene, **{thing: "YES"}))          # the child seat is there
+        free = dict(scene, child_seat="NO", **{thing: "YES"})
+        assert SPACE.is_valid(free)
+        free.update(luggage="YES", luggage_position="PASSENGER", luggage_colour="YELLOW", luggage_orientation=50.0)
+        assert any("needs the seat free" in p for p in SPACE.violations(free))
+    # a phone in the hand and one on the seat are two phones: either without the other is fine
+    assert SPACE.is_valid(dict(scene, child_seat="NO", phone_position="P1", phone_codriver_seat="NO"))
+    assert SPACE.is_valid(dict(scene, child_seat="NO", phone_position="NONE", phone_codriver_seat="YES"))
 
 
 def test_out_of_domain_and_unknown_features_are_named():
@@ -132,7 +159,7 @@ def test_encoding_round_trips(scene):
 @given(st.integers(0, 2**32 - 1), st.lists(st.floats(-0.5, 1.5), min_size=19, max_size=19))
 def test_repair_turns_any_vector_into_a_valid_scene(seed, u):
     raw = {n: f.decode(x) for (n, f), x in zip(SPACE.features.items(), u)}
-    raw["phone_position"], raw["phone"] = "P4", "NO"  # break a constraint on purpose
+    raw["child_seat"], raw["phone_codriver_seat"] = "YES", "YES"  # break a constraint on purpose
     repaired = SPACE.repair(raw, np.random.default_rng(seed))
     assert SPACE.violations(repaired) == []
 

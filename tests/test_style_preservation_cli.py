@@ -92,7 +92,10 @@ def test_stylize_pairs_writes_nst_counts_flips_and_feeds_realism(pairs, tmp_path
         with Image.open(pairs / sample / "nst.png") as nst:
             assert nst.size == (40, 32)  # written back at the render's size
     report = json.loads((pairs / "nst.json").read_text())
-    assert report["count"] == 2 and -1 <= report["ssim_luma_mean"] <= 1
+    scores = [structure_score(pairs / sample / "sim.png", pairs / sample / "nst.png") for sample in ("s0", "s1")]
+    assert report["count"] == 2
+    assert report["ssim_luma_mean"] == pytest.approx((scores[0].ssim_luma + scores[1].ssim_luma) / 2)
+    assert [r["edge_agreement"] for r in report["images"]] == pytest.approx([s.edge_agreement for s in scores])
     assert report["settings"]["steps"] == 1 and report["settings"]["style_weight"] == 10.0
     flips = report["answer_flips"]
     assert flips["samples"] == 2 and flips["compared"] > 0 and flips["flipped"] > 0 and flips["sut_errors"] == 0

@@ -14,7 +14,8 @@ from isu_validate.sut import build_request, open_sut
 SCENE = {"driver_gender": "FEMALE", "driver_emotion": "SERIOUS", "driver_height": "H1", "driver_weight": "W1",
          "phone_position": "NONE", "seat_belt": "NO", "tshirt_colour": "WHITE", "child_seat": "NO",
          "car_lights": "OFF", "external_light": "MEDIUM", "luggage": "YES", "luggage_orientation": 45.0,
-         "luggage_position": "BACK", "luggage_colour": "YELLOW", "phone": "NO", "cola_bottle": "YES", "can": "NO"}
+         "luggage_position": "BACK", "luggage_colour": "YELLOW", "phone_codriver_seat": "NO",
+         "colabottle_codriver_seat": "YES", "colacan_codriver_seat": "NO"}
 
 # A small industrial-prototype stand-in: answers every question with its first option,
 # except what the environment tells it to do (so one script covers every behaviour).
@@ -81,8 +82,8 @@ def test_command_answers_and_receives_the_protocol(space, program, image, monkey
     monkeypatch.setenv("FAKE_ISU", "echo")
     echoed = json.loads(sut.query(build_request(space, SCENE, image, "vqa")).raw)["received"]
     assert echoed["mode"] == "vqa" and echoed["image"] == str(image.resolve())
-    assert echoed["questions"][0] == {"key": "driver_gender", "question": "What is the gender of the driver?",
-                                      "options": ["MALE", "FEMALE", "NONE"]}
+    assert echoed["questions"][0] == {"key": "driver_gender", "question": "Is the driver male or female?",
+                                      "options": ["MALE", "FEMALE"]}
     assert "child" not in {q["key"] for q in echoed["questions"]}  # inactive: not asked
 
 

@@ -98,7 +98,7 @@ def scene():
     return {"driver_gender": "MALE", "driver_emotion": "HAPPY", "driver_height": "H2", "driver_weight": "W2",
             "phone_position": "NONE", "seat_belt": "YES", "tshirt_colour": "BLACK", "child_seat": "NO",
             "car_lights": "OFF", "external_light": "HIGH", "luggage": "NO", "luggage_orientation": 30.0,
-            "phone": "NO", "cola_bottle": "NO", "can": "NO"}
+            "phone_codriver_seat": "NO", "colabottle_codriver_seat": "NO", "colacan_codriver_seat": "NO"}
 
 
 @pytest.fixture()
@@ -124,7 +124,8 @@ def open_openai(server, space, **options):
 
 MESSY = ("Sure! Looking at the cabin image:\n```json\n{'driver_gender': 'Male', 'driver_emotion': 'happy',\n"
          " 'phone_position': 'no', 'seat_belt': true, 'tshirt_colour': 'Black', 'child_seat': 'No',\n"
-         " 'luggage': 'NO', 'phone': 'No', 'cola_bottle': 'no', 'can': 'N/A', 'luggage_colour': 'YELLOW'}\n```\n"
+         " 'luggage': 'NO', 'phone_codriver_seat': 'No', 'colabottle_codriver_seat': 'no',\n"
+         " 'colacan_codriver_seat': 'N/A', 'luggage_colour': 'YELLOW'}\n```\n"
          "Let me know if you need anything else.")
 
 
@@ -136,9 +137,9 @@ def test_messy_reply_is_parsed_and_request_is_well_formed(server, space, scene, 
     assert response.error is None
     assert response.answers == {"driver_gender": "MALE", "driver_emotion": "HAPPY", "phone_position": "NO",
                                 "seat_belt": "YES", "tshirt_colour": "BLACK", "child_seat": "NO", "luggage": "NO",
-                                "phone": "NO", "cola_bottle": "NO"}
+                                "phone_codriver_seat": "NO", "colabottle_codriver_seat": "NO"}
     # "N/A" is no answer to a YES/NO question without NONE: invalid, not silently NO
-    assert response.extra["status"]["can"] == "invalid"
+    assert response.extra["status"]["colacan_codriver_seat"] == "invalid"
     assert response.extra["outcome"] == "partial"
     assert "luggage_colour" in response.extra["ignored_keys"]  # inactive feature: never scored
     sent = server.requests[0]
@@ -287,12 +288,12 @@ def test_rate_limiter_spaces_requests_per_minute():
 
 
 def test_repeats_and_cache_over_http(server, space, scene, image, with_key, tmp_path):
-    server.script = [chat('{"seat_belt": "YES", "phone": "NO"}'), chat('{"seat_belt": "NO", "phone": "NO"}'),
-                     chat(f'{{"seat_belt": "YES", "phone": "YES", "note": "{KEY}"}}')]
+    server.script = [chat('{"seat_belt": "YES", "luggage": "NO"}'), chat('{"seat_belt": "NO", "luggage": "NO"}'),
+                     chat(f'{{"seat_belt": "YES", "luggage": "YES", "note": "{KEY}"}}')]
     sut = open_openai(server, space, repeats=3, cache_dir=tmp_path / "cache")
     request = build_request(space, scene, image, "vqa")
     first = sut.query(request)
-    assert first.answers["seat_belt"] == "YES" and first.answers["phone"] == "NO"
+    assert first.answers["seat_belt"] == "YES" and first.answers["luggage"] == "NO"
     assert first.extra["consistency_by_feature"]["seat_belt"] == pytest.approx(2 / 3)
     assert len(server.requests) == 3
     again = sut.query(request)  # every repeat comes from the cache: the server is not asked

@@ -10,7 +10,7 @@ from isu_validate.sut.parse import normalise_answer, parse_caption, parse_vqa
 SCENE = {"driver_gender": "MALE", "driver_emotion": "HAPPY", "driver_height": "H1", "driver_weight": "W1",
          "phone_position": "P3", "seat_belt": "YES", "tshirt_colour": "BLACK", "child_seat": "YES", "child": "YES",
          "child_seat_orientation": "REAR_FACING", "car_lights": "ON", "external_light": "LOW", "luggage": "NO",
-         "phone": "YES", "cola_bottle": "NO", "can": "NO"}
+         "phone_codriver_seat": "NO", "colacan_codriver_seat": "NO", "colabottle_codriver_seat": "NO"}
 
 
 @pytest.fixture(scope="module")
@@ -23,11 +23,27 @@ def test_prompt_asks_only_active_features_in_figure_2_style():
     request = build_request(space, SCENE, "x.png", "vqa")
     assert [q.key for q in request.questions] == [q.key for q in space.questions(SCENE)]
     text = request.prompt
-    assert text.startswith(space.prompt_rules[0]) and "Answer NONE" in text
-    assert '"child_seat_orientation": How is the child seat oriented? Options: FRONT_FACING, REAR_FACING, NONE' in text
-    assert "luggage_colour" not in text and "REAR_FACING" in text and "Return JSON" in text
+    # the paper's rules, word for word, then key/question/answer_options blocks and the JSON to return
+    assert text.startswith("You are an image analysis assistant to evaluate in-cabin scenes.")
+    for rule in ("- Return only the JSON.", "- Do not provide explanations.",
+                 "- For each question, choose exactly one answer from the given `answer_options`.",
+                 "- Do not create new answers, only choose from the provided options.",
+                 '- If a question references something not present, select the provided "NONE".'):
+        assert rule in text
+    assert ('key: "driver_gender"\nquestion: "Is the driver male or female?"\n'
+            'answer_options: ["MALE", "FEMALE"]') in text
+    assert 'answer_options: ["FRONT_FACING", "REAR_FACING", "NONE"]' in text
+    assert text.index("# Rules") < text.index("# Questions") < text.index("# Output")
+    assert "luggage_colour" not in text and '"colabottle_codriver_seat": "..."' in text
+    # the earlier wording, by name
+    compact = build_request(space, SCENE, "x.png", "vqa", style="compact").prompt
+    assert compact.startswith("You are an in-car scene understanding system") and "Answer NONE" in compact
+    assert ('"child_seat_orientation": Is the baby seat front-facing or rear-facing? '
+            'Options: FRONT_FACING, REAR_FACING, NONE') in compact and "Return JSON" in compact
+    with pytest.raises(ValueError, match="unknown prompt style 'fancy'.*compact"):
+        build_request(space, SCENE, "x.png", "vqa", style="fancy")
     custom = build_request(space, SCENE, "x.png", "vqa", prompt="Rules first.\n{questions}\nThanks.")
-    assert custom.prompt.startswith("Rules first.\nQuestions") and custom.prompt.endswith("Thanks.")
+    assert custom.prompt.startswith("Rules first.\n# Questions") and custom.prompt.endswith("Thanks.")
     caption = build_request(space, SCENE, "x.png", "vc")
     assert caption.prompt.startswith("Describe what is visible in the scene") and caption.questions == ()
     with pytest.raises(ValueError, match="unknown SUT mode"):
@@ -38,9 +54,9 @@ def test_prompt_asks_only_active_features_in_figure_2_style():
     ('```json\n{"seat_belt": "YES", "child": "YES"}\n```', {"seat_belt": "YES", "child": "YES"}),
     ('Here you go: {"seat_belt": "yes", "child": "Yes"} Hope it helps!', {"seat_belt": "YES", "child": "YES"}),
     ("{'seat_belt': 'YES', 'driver_gender': 'male'}", {"seat_belt": "YES", "driver_gender": "MALE"}),
-    ('{"seat_belt": true, "phone": false}', {"seat_belt": "YES", "phone": "NO"}),
+    ('{"seat_belt": true, "phone_codriver_seat": false}', {"seat_belt": "YES", "phone_codriver_seat": "NO"}),
     ("{seat_belt: YES, child_seat_orientation: rear-facing,}", {"seat_belt": "YES", "child_seat_orientation": "REAR_FACING"}),
-    ('{"Seat Belt": "Yes.", "What is the gender of the driver?": "Male"}', {"seat_belt": "YES", "driver_gender": "MALE"}),
+    ('{"Seat Belt": "Yes.", "Is the driver male or female?": "Male"}', {"seat_belt": "YES", "driver_gender": "MALE"}),
     ('{"answers": {"seat_belt": "NO"}}', {"seat_belt": "NO"}),
     ('{"seat_belt": {"answer": "YES", "confidence": 0.8}}', {"seat_belt": "YES"}),
     ('seat_belt: NO\ndriver_gender: FEMALE', {"seat_belt": "NO", "driver_gender": "FEMALE"}),
@@ -86,7 +102,7 @@ def test_answer_normalisation(value, options, expected):
 def test_invalid_missing_and_conflicting_are_classified(questions):
     parsed = parse_vqa('{"seat_belt": "MAYBE", "child": "YES", "child": "NO", "driver_gender": "MALE"}', questions)
     assert parsed.status["seat_belt"] == "invalid" and parsed.status["child"] == "invalid"
-    assert parsed.status["driver_gender"] == "answered" and parsed.status["phone"] == "missing"
+    assert parsed.status["driver_gender"] == "answered" and parsed.status["phone_codriver_seat"] == "missing"
     assert any(p.startswith("seat_belt: invalid") and "MAYBE" in p for p in parsed.problems)
     assert any("conflicting" in p for p in parsed.problems)
 
@@ -123,3 +139,36 @@ def test_huge_and_pathological_replies_stay_fast(questions):
         start = time.perf_counter()
         parse_vqa(text, questions)
         assert time.perf_counter() - start < 3.0
+
+
+def test_a_run_asks_in_its_prompt_style_and_resumes_in_it(tmp_path):
+    import argparse
+
+    from isu_validate.commands.run import add_run_options, config_from_args
+    from isu_validate.pipeline import build_components
+    from isu_validate.archive.run_file import ResumeMismatch, check_run_dir, write_run_file
+    from isu_validate.commands.run import _mismatch_message
+    from isu_validate.search.loop import _run_file_content
+
+    space = load_space()
+    parser = argparse.ArgumentParser()
+    add_run_options(parser)
+    for argv, opening in ((["--out", str(tmp_path / "a")], "You are an image analysis assistant"),
+                          (["--out", str(tmp_path / "b"), "--prompt-style", "compact"], "You are an in-car scene")):
+        config = config_from_args(parser.parse_args(["--sut", "command:true"] + argv))
+        parts = build_components(config.pipeline, space)   # the real renderer (not started), SUT and judge
+        assert parts.build_request(space, SCENE, "x.png", "vqa", None).prompt.startswith(opening)
+        write_run_file(config.pipeline.run_dir, _run_file_content(config, space))   # run.json, as a run writes it
+    # resuming takes the style from run.json; another one is refused by name
+    resumed = config_from_args(parser.parse_args(["--out", str(tmp_path / "b"), "--resume"]))
+    assert resumed.pipeline.prompt_style == "compact"
+    other = config_from_args(parser.parse_args(["--out", str(tmp_path / "b"), "--resume", "--prompt-style", "paper"]))
+    with pytest.raises(ResumeMismatch) as refused:
+        check_run_dir(tmp_path / "b", other.identity(), space.hash, {}, resume=True)
+    assert "--prompt-style: 'compact' in the stored run, 'paper' now" in _mismatch_message(refused.value)
+    with pytest.raises(SystemExit):
+        parser.parse_args(["--prompt-style", "poetic"])
+    vc = config_from_args(parser.parse_args(["--out", str(tmp_path / "c"), "--mode", "vc", "--sut", "command:true",
+                                             "--caption-template", "isu-paper-compact"]))
+    judge = build_components(vc.pipeline, space).judge
+    assert judge.template == "isu-paper-compact"

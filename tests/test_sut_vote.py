@@ -16,10 +16,14 @@ def test_majority_and_consistency():
 
 
 def test_tie_keeps_the_answer_given_first_and_is_recorded():
-    runs = [({"a": "NO"}, {}), ({"a": "YES"}, {}), ({}, {}), ({"a": "YES"}, {}), ({"a": "NO"}, {})]
-    vote = majority(["a"], runs)
-    assert vote.answers == {"a": "NO"} and vote.ties == {"a": ["NO", "YES"]}
+    # "YES" is given first and is not the alphabetically first option: order, not the alphabet, decides
+    runs = [({"a": "YES", "b": "NO"}, {}), ({"a": "NO", "b": "YES"}, {}), ({}, {}), ({"a": "NO", "b": "YES"}, {}),
+            ({"a": "YES", "b": "NO"}, {})]
+    vote = majority(["a", "b"], runs)
+    assert vote.answers == {"a": "YES", "b": "NO"} and vote.ties == {"a": ["YES", "NO"], "b": ["NO", "YES"]}
     assert vote.by_feature["a"] == pytest.approx(2 / 5)  # the errored repeat counts as disagreeing
+    three_way = majority(["c"], [({"c": "WHITE"}, {}), ({"c": "BLACK"}, {}), ({"c": "NONE"}, {})])
+    assert three_way.answers == {"c": "WHITE"} and three_way.ties == {"c": ["WHITE", "BLACK", "NONE"]}
 
 
 def test_unanswered_features_keep_their_status():

@@ -32,7 +32,7 @@ SCENE = {"driver_gender": "FEMALE", "driver_emotion": "HAPPY", "driver_height": 
          "phone_position": "NONE", "seat_belt": "YES", "tshirt_colour": "WHITE", "child_seat": "YES", "child": "NO",
          "child_seat_orientation": "FRONT_FACING", "car_lights": "OFF", "external_light": "MEDIUM",
          "luggage": "YES", "luggage_orientation": 60.0, "luggage_position": "BACK", "luggage_colour": "ANTHRACITE",
-         "phone": "NO", "cola_bottle": "NO", "can": "NO"}
+         "phone_codriver_seat": "NO", "colacan_codriver_seat": "NO", "colabottle_codriver_seat": "NO"}
 
 
 @pytest.fixture(scope="module")
@@ -145,7 +145,7 @@ def test_the_reference_caption_says_nothing_about_hidden_things(space):
     full = reference_caption(space, SCENE)
     hidden = reference_caption(space, SCENE, hidden=["luggage", "luggage_position", "luggage_colour"])
     assert "suitcase" in full and "suitcase" not in hidden
-    assert hidden.startswith("The image shows the inside of a car")
+    assert hidden.startswith("The image is taken from inside a car")
 
 
 # ------------------------------------------------------------------ frames that cannot show the scene

@@ -14,6 +14,9 @@ def register(sub) -> None:
     train.add_argument("--seed", type=int, default=0)
     train.add_argument("--space", default="isu-paper")
     train.add_argument("--preset", default="draft", help="render preset (default draft, as the demo renders)")
+    train.add_argument("--check-preset", action="append", default=[], metavar="PRESET[:N]",
+                       help="also render the first N held-out scenes (default all) at PRESET and report the "
+                            "accuracy on them, e.g. standard:100 (repeatable)")
     train.add_argument("--camera", default="default")
     train.add_argument("--cabin", default="default")
     train.add_argument("--out", type=Path,
@@ -35,10 +38,16 @@ def cmd_train(args) -> int:
         raise ValueError("use at least --n 10 training scenes and --held-out 1")
     space = load_space(args.space)
     out = args.out or args.workdir / "model"  # never the shipped model unless asked for by name
-    renderer = open_renderer(preset=args.preset, camera=args.camera, cabin=args.cabin,
+    checks = dict(parse_check(spec, args.held_out) for spec in args.check_preset)
+
+    def renderer_for(preset: str):
+        return open_renderer(preset=preset, camera=args.camera, cabin=args.cabin, space=space,
                              cache_dir=args.workdir / "cache", log_dir=args.workdir / "logs")
+
+    renderer = renderer_for(args.preset)
     try:
-        card = train_reference(space, renderer, out, args.workdir, args.n, args.held_out, args.seed, args.preset)
+        card = train_reference(space, renderer, out, args.workdir, args.n, args.held_out, args.seed, args.preset,
+                               other_presets=checks, renderer_for=renderer_for)
     finally:
         renderer.close()
     print(json.dumps(card["held_out"]["per_feature"], indent=2))
@@ -46,3 +55,18 @@ def cmd_train(args) -> int:
     if out.resolve() != default_model_dir().resolve():
         print(f"use it with: isu-validate run --sut reference --sut-option model_dir={out}")
     return 0
+
+
+def parse_check(spec: str, held_out: int) -> tuple[str, int]:
+    """``standard:100`` -> ("standard", 100); ``standard`` -> all held-out scenes."""
+    from ..render.presets import get_preset
+
+    name, _, count = spec.partition(":")
+    get_preset(name)   # an unknown preset is named before anything renders
+    try:
+        n = int(count) if count else held_out
+    except ValueError:
+        raise ValueError(f"--check-preset {spec!r}: N must be a whole number (PRESET[:N])") from None
+    if not 1 <= n <= held_out:
+        raise ValueError(f"--check-preset {spec!r}: N must be between 1 and --held-out ({held_out})")
+    return name, n

@@ -15,6 +15,7 @@ from pathlib import Path
 
 from ..archive.run_file import RUN_FILE, ResumeMismatch, read_run_file
 from ..pipeline import PipelineConfig
+from ..sut.prompt import PROMPT_STYLES
 from ..render.visibility import DEFAULT_MIN_VISIBLE, parse_min_visible
 from .sut import parse_options
 from ..search import ALGORITHMS, RunConfig, RunError, SUTErrorsStop, run_search
@@ -25,6 +26,7 @@ DEFAULT_BUDGET = _RUN.budget_tests
 SETTINGS = {
     "sut": ("pipeline", "sut"), "mode": ("pipeline", "mode"), "space": ("pipeline", "space"),
     "threshold": ("pipeline", "threshold"), "prompt": ("pipeline", "prompt"), "repeats": ("pipeline", "repeats"),
+    "prompt_style": ("pipeline", "prompt_style"), "caption_template": ("pipeline", "caption_template"),
     "preset": ("pipeline", "preset"), "camera": ("pipeline", "camera"), "cabin": ("pipeline", "cabin"),
     "channels": ("pipeline", "channels"), "sut_timeout": ("pipeline", "sut_timeout_s"),
     "extrinsics_from": ("pipeline", "extrinsics_from"), "min_visible": ("pipeline", "min_visible"),
@@ -79,6 +81,13 @@ def add_run_options(p) -> None:
     p.add_argument("--threshold", type=float,
                    help="oracle threshold in 0..1 (default: 1.0 for vqa, i.e. any mistake fails; F_emb 0.65 for vc)")
     p.add_argument("--prompt", help="override the prompt sent to the SUT")
+    p.add_argument("--prompt-style", choices=sorted(PROMPT_STYLES),
+                   help=f"wording of the VQA prompt: paper (the paper's Figure 2) or compact (isu-validate's "
+                        f"earlier, shorter wording) (default {d.prompt_style})")
+    p.add_argument("--caption-template", metavar="NAME|FILE",
+                   help="reference-caption template for --mode vc: a name in data/captions (isu-paper: the paper's "
+                        "captioning figure, the default for isu-paper; isu-paper-compact: the earlier wording) "
+                        "or a .toml file (default: the one named after the space)")
     p.add_argument("--repeats", type=int, help=f"ask each scene K times, majority vote (default {d.repeats})")
     p.add_argument("--preset", help=f"render preset: draft | standard | final (default {d.preset})")
     p.add_argument("--camera", help=f"camera rig: shipped name or TOML path (default {d.camera}); with an imaging "

@@ -18,6 +18,7 @@ from typing import Any
 
 from ..protocols import SUTRequest
 from ..space import Question, load_space
+from ..sut.prompt import DEFAULT_PROMPT_STYLE, PROMPT_STYLES
 
 EPILOG = """adapter options (--sut-option NAME=VALUE):
   openai:   api_key_env (default OPENAI_API_KEY), auth=bearer|api-key, api_version (Azure),
@@ -43,6 +44,8 @@ def register(sub) -> None:
                                                   "features and judge the answer")
     check.add_argument("--space", default="isu-paper", help="scene space name or TOML file (default: %(default)s)")
     check.add_argument("--prompt", help="replace the captioning prompt, or the VQA rules ({questions} places the questions)")
+    check.add_argument("--prompt-style", choices=sorted(PROMPT_STYLES), default=DEFAULT_PROMPT_STYLE,
+                       help="wording of the VQA prompt: paper (the paper's Figure 2, default) or compact (earlier)")
     check.add_argument("--repeats", type=int, default=1, help="ask K times, majority vote per feature")
     check.add_argument("--timeout", type=float, default=60.0, help="seconds per request (default: %(default)s)")
     check.add_argument("--sut-option", action="append", default=[], metavar="NAME=VALUE",
@@ -98,10 +101,10 @@ def check_command(args) -> int:
     space = load_space(args.space)
     scene = space.check(load_scene(args.scene)) if args.scene else None
     if scene is not None:
-        request = build_request(space, scene, args.image, args.mode, args.prompt)
+        request = build_request(space, scene, args.image, args.mode, args.prompt, args.prompt_style)
     elif args.mode == "vqa":
         questions = all_questions(space)
-        request = SUTRequest("vqa", args.image, vqa_prompt(space, questions, args.prompt), questions)
+        request = SUTRequest("vqa", args.image, vqa_prompt(space, questions, args.prompt, args.prompt_style), questions)
     else:
         request = build_request(space, {}, args.image, "vc", args.prompt)
     sut = open_sut(args.sut, space=space, repeats=args.repeats, cache_dir=args.cache_dir, timeout_s=args.timeout,

@@ -16,7 +16,7 @@ from ..space import SceneSpace
 from . import similarity, text_metrics
 from .oracles import (CAPTION_METRICS, DEFAULT_THRESHOLD, check_conjunction, check_threshold, conjunction_failed,
                       emb_failed)
-from .reference_caption import reference_caption
+from .reference_caption import reference_caption, template_for
 
 SETTINGS = {**text_metrics.SETTINGS, **similarity.SETTINGS}
 
@@ -32,8 +32,9 @@ class CaptionJudge:
     mode = "vc"
 
     def __init__(self, space: SceneSpace, threshold: float | Mapping[str, float] | None = None,
-                 oracle: str | None = None, templates: str | None = None):
-        self.space, self.templates = space, templates
+                 oracle: str | None = None, template: str | None = None):
+        self.space, self.template = space, template
+        template_for(space, template)  # a missing or foreign template stops the run before any test
         self.oracle = oracle or "emb"
         if self.oracle == "emb":
             if isinstance(threshold, Mapping):
@@ -52,14 +53,14 @@ class CaptionJudge:
         if response.error:
             return Verdict({}, 1.0, False, {"sut_error": response.error, **settings})
         # the reference says nothing about what the frame hides: no sentence naming an occluded feature
-        reference = reference_caption(self.space, scene, self.templates, hidden=occluded)
+        reference = reference_caption(self.space, scene, self.template, hidden=occluded)
         captions = [c or "" for c in (response.extra.get("captions") or [response.caption])]
         scored = [caption_metrics(c, reference) for c in captions]
         fitness = {m: sum(s[m] for s in scored) / len(scored) for m in CAPTION_METRICS}
         failed = (emb_failed(fitness, self.threshold) if self.oracle == "emb"
                   else conjunction_failed(fitness, self.threshold))
-        details: dict[str, Any] = {"reference_caption": reference, "metrics": SETTINGS, **settings,
-                                   "occluded": sorted(occluded),
+        details: dict[str, Any] = {"reference_caption": reference, "caption_template": self.template or "default",
+                                   "metrics": SETTINGS, **settings, "occluded": sorted(occluded),
                                    "truncated": any(similarity.is_truncated(c) for c in captions if c.strip())}
         if any(not c.strip() for c in captions):
             details["problems"] = ["empty caption: scored 0 on every metric"]

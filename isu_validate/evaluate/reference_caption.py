@@ -1,7 +1,8 @@
 """The reference caption of a scene, built from its active features.
 
-Templates live in ``data/captions/<space name>.toml`` (format described in
-``data/captions/isu-paper.toml``).  A space without a template file falls back to
+Templates live in ``data/captions/<name>.toml`` (format described in
+``data/captions/isu-paper.toml``); a space's default is the one named after it, and
+another (``isu-paper-compact``, or any file) can be chosen.  A space without a template file falls back to
 its features' ``caption`` fragments: "The scene shows a male driver, who looks happy, ...".
 Inactive features never reach the caption.
 """
@@ -106,22 +107,44 @@ def fragments_template(space: SceneSpace) -> CaptionTemplate:
 
 
 @lru_cache(maxsize=16)
-def _template_for(space_id: int, space: SceneSpace, folder: str) -> CaptionTemplate:
-    path = Path(folder) / f"{space.name}.toml"
-    if not path.is_file():
+def _template_for(space_id: int, space: SceneSpace, template: str | None) -> CaptionTemplate:
+    path = template_path(space, template)
+    if path is None:
         return fragments_template(space)
     try:
         raw = tomllib.loads(path.read_text())
     except tomllib.TOMLDecodeError as exc:
         raise SpaceError(f"{path}: not valid TOML: {exc}") from None
+    meant_for = raw.get("space", space.name)
+    if meant_for != space.name:
+        raise SpaceError(f"{path}: a caption template for space {meant_for!r}, not for {space.name!r}; "
+                         f"choose a template written for {space.name!r}")
     return parse_template(raw, space, str(path))
 
 
-def template_for(space: SceneSpace, folder: str | Path | None = None) -> CaptionTemplate:
-    return _template_for(id(space), space, str(folder or data_dir() / "captions"))
+def template_path(space: SceneSpace, template: str | Path | None = None) -> Path | None:
+    """The template file: ``template`` as a name in data/captions (``isu-paper-compact``) or a
+    .toml path; by default data/captions/<space name>.toml, or None (use the fragments)."""
+    folder = data_dir() / "captions"
+    if template is None:
+        path = folder / f"{space.name}.toml"
+        return path if path.is_file() else None
+    text = str(template)
+    path = Path(text) if text.endswith(".toml") or "/" in text else folder / f"{text}.toml"
+    if not path.is_file():
+        shipped = ", ".join(sorted(p.stem for p in folder.glob("*.toml")))
+        raise SpaceError(f"caption template {text!r} not found (looked for {path}); give a .toml file "
+                         f"or a shipped name: {shipped}")
+    return path
 
 
-def reference_caption(space: SceneSpace, scene: Mapping[str, Any], folder: str | Path | None = None,
+def template_for(space: SceneSpace, template: str | Path | None = None) -> CaptionTemplate:
+    return _template_for(id(space), space, None if template is None else str(template))
+
+
+def reference_caption(space: SceneSpace, scene: Mapping[str, Any], template: str | Path | None = None,
                       hidden: Collection[str] = ()) -> str:
-    text = template_for(space, folder).fill(space, scene, hidden)
+    """The caption the scene's truth reads as, from ``template`` (see ``template_path``), saying
+    nothing about the ``hidden`` features."""
+    text = template_for(space, template).fill(space, scene, hidden)
     return re.sub(r",\s*$", ".", text) if not text.endswith(".") else text

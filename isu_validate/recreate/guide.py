@@ -77,6 +77,10 @@ def _placement(rule: Mapping, value: Any, cabin: dict) -> Placement | None:
     if isinstance(target, list) and len(target) == 3:
         x, y, z = (float(v) for v in target)
         return Placement(f"at x = {x:+.2f} m, y = {y:+.2f} m, z = {z:.2f} m", (x, y, z), None, footprint)
+    if isinstance(target, Mapping) and "position" in target:   # a placed object: position and XYZ rotation
+        x, y, z = (float(v) for v in target["position"])
+        turn = float((target.get("rotation_deg") or (0.0, 0.0, 0.0))[2])
+        return Placement(f"at x = {x:+.2f} m, y = {y:+.2f} m, z = {z:.2f} m", (x, y, z), turn, footprint)
     if isinstance(target, Mapping) and "offset" in target:   # a hand position, relative to the body
         dx, dy, dz = (float(v) for v in target["offset"])
         return Placement(f"{target.get('hand', '?')} hand, {dx:+.2f} / {dy:+.2f} / {dz:+.2f} m "

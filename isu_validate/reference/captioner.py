@@ -14,7 +14,8 @@ BELT = {"YES": ["wearing a seat belt", "with the seat belt fastened"],
         "NO": ["not wearing a seat belt", "without a seat belt"]}
 PHONE_IN_HAND = {"YES": ["holding a phone", "using a mobile phone"], "NO": []}
 ORIENTATION = {"FRONT_FACING": "front-facing", "REAR_FACING": "rear-facing"}
-OBJECTS = {"phone": "a mobile phone", "cola_bottle": "a cola bottle", "can": "a drink can"}
+ON_CODRIVER_SEAT = {"phone_codriver_seat": "a mobile phone", "colabottle_codriver_seat": "a cola bottle",
+                    "colacan_codriver_seat": "a cola can"}
 PLACES = {"PASSENGER": "on the passenger seat", "BACK": "on the back seat"}
 
 
@@ -34,10 +35,11 @@ def describe(p: dict[str, str], variant: int = 0) -> str:
         colour = {"YELLOW": "yellow ", "ANTHRACITE": "anthracite "}.get(p.get("luggage_colour", ""), "")
         place = PLACES.get(p.get("luggage_position", ""), "in the car")
         sentences.append(f"A {colour}suitcase lies {place}")
-    things = [OBJECTS[k] for k in ("phone", "cola_bottle", "can") if p.get(k) == "YES"]
+    things = [name for key, name in ON_CODRIVER_SEAT.items() if p.get(key) == "YES"]
     if things:
         listed = things[0] if len(things) == 1 else ", ".join(things[:-1]) + " and " + things[-1]
-        sentences.append(_pick(["There is also ", "The car also contains ", "I can also see "], variant, 7) + listed)
+        opener = _pick(["There is also ", "The car also contains ", "I can also see "], variant, 7)
+        sentences.append(opener + listed + _pick([" on the passenger seat", " on the front passenger seat"], variant, 8))
     return ". ".join(s[0].upper() + s[1:] for s in sentences if s) + "."
 
 

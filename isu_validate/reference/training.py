@@ -3,7 +3,9 @@
 The training set is balanced per predicted feature (each answer equally likely where
 the scene allows it), rendered with the project's renderer, and committed image by
 image, so an interrupted ``reference train`` resumes without re-rendering.  Accuracy
-is measured on a separately seeded held-out set and written to a model card as it is.
+is measured on a separately seeded held-out set and written to a model card as it is;
+the held-out scenes (or their first N) may also be rendered at other presets, to show
+how the model does on images it was not trained on.
 """
 from __future__ import annotations
 
@@ -12,6 +14,7 @@ import time
 from collections import defaultdict
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable, Mapping
 
 import numpy as np
 
@@ -27,20 +30,59 @@ class Example:
     scene: dict      # canonical
 
 
-def balanced_scenes(space: SceneSpace, n: int, rng: np.random.Generator) -> list[dict]:
+def balanced_scenes(space: SceneSpace, n: int, rng: np.random.Generator, pool_factor: int = 6) -> list[dict]:
     """Valid scenes in which each predicted feature's answers are about equally frequent
-    (uniform values would make, e.g., 'no phone in hand' 1 in 11)."""
-    scenes = []
-    for scene in space.sample(rng, n):
+    (uniform values would make, e.g., 'no phone in hand' 1 in 11) wherever the rest of the
+    scene leaves the feature free to take any of them.
+
+    Each candidate draws every predicted feature's answer uniformly, then is repaired; ``n``
+    scenes are then chosen greedily from ``pool_factor * n`` candidates, each time the one that
+    best lifts the answers seen least so far.  A scene counts towards a feature's balance only
+    where the constraints would allow every answer of it: balancing, say, the phone on the
+    co-driver seat over all scenes would need it on every seat free of a child seat, and
+    then together with the can and the bottle (a head could not tell them apart: they were
+    once learnt as one 'something on the seat' head with identical weights)."""
+    pool = [space.repair(_uniform_answers(space, scene, rng), rng) for scene in space.sample(rng, n * pool_factor)]
+    columns = [(f.name, answer) for f in space.predicted for answer in sorted({f.truth(v) for v in f.values})]
+    column_of = {key: j for j, key in enumerate(columns)}
+    feature_of = np.array([space.names.index(name) for name, _ in columns])
+    target = np.array([1.0 / sum(1 for other, _ in columns if other == name) for name, _ in columns])
+    onehot = np.zeros((len(pool), len(columns)))
+    for i, scene in enumerate(pool):
+        canonical = space.canonical(scene)
         for feature in space.predicted:
-            by_answer = defaultdict(list)
-            for value in feature.values:
-                by_answer[feature.truth(value)].append(value)
-            answers = sorted(by_answer)
-            values = by_answer[answers[int(rng.integers(len(answers)))]]
-            scene[feature.name] = values[int(rng.integers(len(values)))]
-        scenes.append(space.repair(scene, rng))
-    return scenes
+            if feature.name in canonical and _free(space, scene, feature):
+                onehot[i, column_of[(feature.name, feature.truth(canonical[feature.name]))]] = 1.0
+    counts, totals = np.zeros(len(columns)), np.zeros(len(space.names))
+    jitter = rng.uniform(0, 1e-6, len(pool))   # breaks ties without favouring pool order
+    chosen = []
+    for _ in range(n):
+        share = counts / np.maximum(totals[feature_of], 1.0)
+        score = onehot @ (target - share) + jitter
+        score[chosen] = -np.inf
+        pick = int(np.argmax(score))
+        chosen.append(pick)
+        counts += onehot[pick]
+        np.add.at(totals, feature_of, onehot[pick])
+    return [pool[i] for i in chosen]
+
+
+def _free(space: SceneSpace, scene: dict, feature) -> bool:
+    """Whether the constraints let ``feature`` give every one of its answers, the rest of the scene as it is."""
+    allowed = {feature.truth(v) for v in feature.values if space.is_valid({**scene, feature.name: v})}
+    return allowed == {feature.truth(v) for v in feature.values}
+
+
+def _uniform_answers(space: SceneSpace, scene: dict, rng: np.random.Generator) -> dict:
+    """The scene with each predicted feature set to a uniformly drawn answer (then a value giving it)."""
+    for feature in space.predicted:
+        by_answer = defaultdict(list)
+        for value in feature.values:
+            by_answer[feature.truth(value)].append(value)
+        answers = sorted(by_answer)
+        values = by_answer[answers[int(rng.integers(len(answers)))]]
+        scene[feature.name] = values[int(rng.integers(len(values)))]
+    return scene
 
 
 def render_examples(space: SceneSpace, scenes: list[dict], renderer, folder: Path, label: str) -> list[Example]:
@@ -98,19 +140,30 @@ def accuracy(space: SceneSpace, heads: list[Head], X: np.ndarray, examples: list
 
 
 def train_reference(space: SceneSpace, renderer, out: Path, workdir: Path, n_train: int, n_test: int,
-                    seed: int, preset: str, backbone: Backbone | None = None) -> dict:
+                    seed: int, preset: str, backbone: Backbone | None = None,
+                    other_presets: Mapping[str, int] | None = None,
+                    renderer_for: Callable[[str], object] | None = None) -> dict:
+    """Render, embed, fit and write the heads and the model card. ``other_presets`` maps a preset
+    name to how many of the held-out scenes to render at it as well (``renderer_for(name)`` opens
+    a renderer for it, closed here)."""
     start = time.time()
     train_scenes = balanced_scenes(space, n_train, np.random.default_rng(seed))
     test_scenes = balanced_scenes(space, n_test, np.random.default_rng(seed + 10_000))
     train = render_examples(space, train_scenes, renderer, workdir / "train", "training set")
     test = render_examples(space, test_scenes, renderer, workdir / "held-out", "held-out set")
+    others = {name: _render_at(name, space, test_scenes[:n], renderer_for, workdir)
+              for name, n in (other_presets or {}).items() if name != preset}
     backbone = backbone or Backbone()
     X_train, X_test = embed(backbone, train), embed(backbone, test)
     heads = fit_heads(space, X_train, train, seed)
+    by_preset = {preset: accuracy(space, heads, X_test, test)}
+    by_preset.update({name: accuracy(space, heads, embed(backbone, examples), examples)
+                      for name, examples in others.items()})
     card = {"backbone": backbone.name, "input_size": list(backbone.size), "space": space.name,
             "space_hash": space.hash, "training_scenes": n_train, "held_out_scenes": n_test, "seed": seed,
             "render_preset": preset, "train_seconds": round(time.time() - start, 1),
-            "held_out": accuracy(space, heads, X_test, test),
+            "held_out": by_preset[preset], "held_out_by_preset": by_preset,
+            "held_out_scenes_by_preset": {preset: n_test, **{k: len(v) for k, v in others.items()}},
             "training": accuracy(space, heads, X_train, train)["per_feature"]}
     save_heads(heads, out, {k: card[k] for k in ("backbone", "input_size", "space", "space_hash", "seed")})
     (out / "model_card.json").write_text(json.dumps(card, indent=2))
@@ -118,7 +171,24 @@ def train_reference(space: SceneSpace, renderer, out: Path, workdir: Path, n_tra
     return card
 
 
+def _render_at(preset: str, space: SceneSpace, scenes: list[dict], renderer_for, workdir: Path) -> list[Example]:
+    if renderer_for is None:
+        raise ValueError(f"held-out scenes at preset {preset!r} need a way to open a renderer for it")
+    renderer = renderer_for(preset)
+    try:
+        return render_examples(space, scenes, renderer, workdir / f"held-out-{preset}", f"held-out set at {preset}")
+    finally:
+        close = getattr(renderer, "close", None)
+        if close:
+            close()
+
+
 def model_card_markdown(card: dict) -> str:
+    presets = card.get("held_out_by_preset", {card["render_preset"]: card["held_out"]})
+    counts = card.get("held_out_scenes_by_preset", {card["render_preset"]: card["held_out_scenes"]})
+    others = [p for p in presets if p != card["render_preset"]]
+    also = "".join(f" (rendered at `{p}` too, the first {counts[p]})" for p in others)
+    reproduce = "".join(f" --check-preset {p}:{counts[p]}" for p in others)
     lines = ["# Reference ISU: model card", "",
              "A small, real in-car scene understanding system shipped with isu-validate so that runs work offline.",
              "It is imperfect in honest ways: the accuracies below are measured, not planted.", "",
@@ -128,17 +198,29 @@ def model_card_markdown(card: dict) -> str:
              f"- Scene space: {card['space']} (hash {card['space_hash']})",
              f"- Training set: {card['training_scenes']} rendered scenes, balanced per feature, seed {card['seed']}, "
              f"render preset `{card['render_preset']}`",
-             f"- Held-out set: {card['held_out_scenes']} scenes, seed {card['seed'] + 10_000}",
+             f"- Held-out set: {card['held_out_scenes']} scenes, seed {card['seed'] + 10_000}{also}",
              f"- Reproduce: `isu-validate reference train --n {card['training_scenes']} "
-             f"--held-out {card['held_out_scenes']} --seed {card['seed']} --preset {card['render_preset']}`", "",
-             "## Held-out accuracy per feature", "", "| feature | accuracy | n | training accuracy |", "|---|---|---|---|"]
-    for feature, row in card["held_out"]["per_feature"].items():
-        train = card["training"].get(feature, {}).get("accuracy", float("nan"))
-        lines.append(f"| {feature} | {row['accuracy']:.3f} | {row['n']} | {train:.3f} |")
-    lights = card["held_out"]["by_external_light"]
-    lines += ["", "## Held-out accuracy by external light", "", "| feature | " + " | ".join(lights) + " |",
-              "|---|" + "---|" * len(lights)]
+             f"--held-out {card['held_out_scenes']} --seed {card['seed']} --preset {card['render_preset']}{reproduce}`",
+             "", "## Held-out accuracy per feature", "",
+             "| feature | " + " | ".join(f"{p} | n" for p in presets) + " | training accuracy |",
+             "|---|" + "---|---|" * len(presets) + "---|"]
     for feature in card["held_out"]["per_feature"]:
-        cells = [f"{lights[l][feature]['accuracy']:.3f}" if feature in lights[l] else "-" for l in lights]
-        lines.append(f"| {feature} | " + " | ".join(cells) + " |")
+        cells = []
+        for p in presets:
+            row = presets[p]["per_feature"].get(feature)
+            cells += [f"{row['accuracy']:.3f}", str(row["n"])] if row else ["-", "0"]
+        train = card["training"].get(feature, {}).get("accuracy", float("nan"))
+        lines.append(f"| {feature} | " + " | ".join(cells) + f" | {train:.3f} |")
+    for p, result in presets.items():
+        lines += _by_light(result, f"## Held-out accuracy by external light (preset `{p}`)")
     return "\n".join(lines) + "\n"
+
+
+def _by_light(result: dict, heading: str) -> list[str]:
+    lights = result["by_external_light"]
+    lines = ["", heading, "", "| feature | " + " | ".join(lights) + " |", "|---|" + "---|" * len(lights)]
+    for feature in result["per_feature"]:
+        cells = [f"{lights[light][feature]['accuracy']:.3f} ({lights[light][feature]['n']})"
+                 if feature in lights[light] else "-" for light in lights]
+        lines.append(f"| {feature} | " + " | ".join(cells) + " |")
+    return lines

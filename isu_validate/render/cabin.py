@@ -11,13 +11,15 @@ from ..paths import resolve_rig
 
 PHONE_POSITIONS = tuple(f"P{i}" for i in range(1, 11))
 ASSET_PARTS = ("cabin", "driver_seat", "passenger_seat", "rear_bench", "steering_wheel",
-               "luggage", "child_seat", "phone", "cola_bottle", "can")
+               "luggage", "child_seat", "phone", "colabottle", "colacan")
+# things lying on the co-driver seat: [codriver_seat.<feature>] position and rotation_deg
+CODRIVER_SEAT_OBJECTS = ("phone_codriver_seat", "colacan_codriver_seat", "colabottle_codriver_seat")
 ASSET_SUFFIXES = (".glb", ".gltf", ".obj", ".fbx")
 _REQUIRED = {"shell": ("x_rear", "x_front", "half_width", "roof", "belt_line", "dashboard_top"),
              "steering_wheel": ("centre", "radius", "tilt_deg"),
              "seat_belt": ("upper_anchor", "buckle", "lap_anchor"),
-             "anchors": ("child_seat", "luggage_PASSENGER", "luggage_BACK", "phone_loose", "phone_loose_alt",
-                         "cola_bottle", "can", "interior_light", "rear_light"),
+             "anchors": ("child_seat", "luggage_PASSENGER", "luggage_BACK", "interior_light", "rear_light"),
+             "codriver_seat": CODRIVER_SEAT_OBJECTS,
              "lighting": ("environment", "environment_strength", "window_light_w", "interior_light_w")}
 
 
@@ -59,6 +61,11 @@ def _check(raw: dict, where: str) -> None:
     for seat in ("driver", "passenger", "rear"):
         if seat not in seats:
             raise CabinRigError(f"{where}: missing [seats.{seat}] (see rigs/cabins/default.toml)")
+    for name in CODRIVER_SEAT_OBJECTS:
+        spec = raw["codriver_seat"][name]
+        if not (isinstance(spec, dict) and _triple(spec.get("position")) and _triple(spec.get("rotation_deg"))):
+            raise CabinRigError(f"{where}: [codriver_seat] {name} needs position = [x, y, z] and "
+                                f"rotation_deg = [rx, ry, rz] (see rigs/cabins/default.toml)")
     positions = raw.get("phone_positions", {})
     missing = [p for p in PHONE_POSITIONS if p not in positions]
     if missing:
@@ -68,6 +75,11 @@ def _check(raw: dict, where: str) -> None:
         if spec.get("hand") not in ("left", "right") or spec.get("relative_to") not in ("head", "shoulder", "wheel"):
             raise CabinRigError(f"{where}: [phone_positions.{name}] needs hand = 'left'|'right' and "
                                 f"relative_to = 'head'|'shoulder'|'wheel'")
+
+
+def _triple(value) -> bool:
+    return isinstance(value, list) and len(value) == 3 and all(
+        isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
 
 
 def _resolve_assets(assets: dict, rig_path: Path) -> dict:

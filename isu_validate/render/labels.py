@@ -5,16 +5,18 @@ from __future__ import annotations
 
 # semantic classes: id -> name (0 is everything else: exterior, unlabelled)
 CLASSES = {0: "background", 1: "cabin", 2: "seat", 3: "steering_wheel", 4: "driver", 5: "seat_belt",
-           6: "phone", 7: "child_seat", 8: "child", 9: "luggage", 10: "cola_bottle", 11: "can",
+           6: "phone", 7: "child_seat", 8: "child", 9: "luggage", 10: "colabottle", 11: "colacan",
            12: "interior_light", 13: "board"}
 
-# instances: id -> (name, class name)
+# instances: id -> (name, class name). `phone` is the phone in the driver's hand; the things on the
+# co-driver seat are instances named like their scene features (phone_codriver_seat, ...)
 INSTANCES = {
     1: ("cabin", "cabin"), 2: ("driver_seat", "seat"), 3: ("passenger_seat", "seat"), 4: ("rear_bench", "seat"),
     5: ("steering_wheel", "steering_wheel"), 6: ("driver", "driver"), 7: ("seat_belt", "seat_belt"),
     8: ("phone", "phone"), 9: ("child_seat", "child_seat"), 10: ("child", "child"), 11: ("luggage", "luggage"),
-    12: ("cola_bottle", "cola_bottle"), 13: ("can", "can"), 14: ("interior_light", "interior_light"),
-    15: ("board", "board"), 16: ("driver_face", "driver"),
+    12: ("colabottle_codriver_seat", "colabottle"), 13: ("colacan_codriver_seat", "colacan"),
+    14: ("interior_light", "interior_light"), 15: ("board", "board"), 16: ("driver_face", "driver"),
+    17: ("phone_codriver_seat", "phone"),
 }
 # driver_face: the driver's head (face, hair, ears); the rest of the body stays "driver". A body model
 # that replaces the procedural driver keeps both pass indices (see README: per-feature visibility).

@@ -29,14 +29,16 @@ from .visibility import feature_visibility, min_visible_for, needed_parts, part_
 from .worker import BlenderWorker, WorkerCrashed, WorkerFailed, WorkerTimeout
 
 # bump when the scene content or the outputs change: it is part of every cache key
-RENDERER_VERSION = "isu-blender-3"   # 2: driver_face part, footprints; 3: anny people
+# 2: driver_face part, footprints; 3: the phone, can and bottle lie on the co-driver seat; 4: anny people
+RENDERER_VERSION = "isu-blender-4"
 
 # what the worker shows for a feature the scene space does not have (or that is inactive)
 DEFAULTS = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height": "H2", "driver_weight": "W2",
             "phone_position": "NONE", "seat_belt": "YES", "tshirt_colour": "WHITE", "child_seat": "NO",
             "child": "NO", "child_seat_orientation": "FRONT_FACING", "car_lights": "OFF",
             "external_light": "MEDIUM", "luggage": "NO", "luggage_orientation": 60.0,
-            "luggage_position": "BACK", "luggage_colour": "YELLOW", "phone": "NO", "cola_bottle": "NO", "can": "NO"}
+            "luggage_position": "BACK", "luggage_colour": "YELLOW", "phone_codriver_seat": "NO",
+            "colacan_codriver_seat": "NO", "colabottle_codriver_seat": "NO"}
 
 
 class BlenderRenderer:
@@ -139,6 +141,16 @@ class BlenderRenderer:
         paths, _, _, timings = self._render_with_retry(features, Path(out), extras, tag="extras")
         timings["total_s"] = time.perf_counter() - t0
         return RenderResult(Path(out), paths, timings)
+
+    def bounds(self, scene: Mapping[str, Any]) -> dict[str, tuple[list[float], list[float]]]:
+        """Where the scene puts things, without rendering: each visible render instance's axis-aligned
+        box (min, max corner) in the cabin frame, metres. For checking a rig's geometry."""
+        features = {**DEFAULTS, **self.space.check(scene)}
+        try:
+            reply = self._ensure_worker().request({"op": "bounds", "features": features}, self.timeout_s)
+        except (WorkerCrashed, WorkerTimeout, WorkerFailed) as exc:
+            raise RenderError(f"Blender could not place this scene: {exc} (log: {self.log_path})") from exc
+        return {name: (box[0], box[1]) for name, box in reply["bounds"].items()}
 
     def cache_key(self, canonical: Mapping[str, Any]) -> str:
         people = "" if self.show_people else ":without-people"

@@ -35,6 +35,9 @@ def main() -> int:
                 reply = {"build_s": time.perf_counter() - t}
             elif op == "render":
                 reply = _render(studio, request)
+            elif op == "bounds":
+                studio.apply(request["features"], request.get("extras", {}))
+                reply = {"bounds": studio.bounds()}
             elif op == "ping":
                 reply = {}
             else:

@@ -1,6 +1,7 @@
-"""Loose objects: child seat (front- or rear-facing; the child in it is an anny body, see people.py),
-suitcase, phone, cola bottle, drink can. Each is built the first time a scene needs it (never for scenes that do not), then only
-shown, hidden, moved or recoloured."""
+"""Objects: the child seat (front- or rear-facing; the child in it is an anny body, see people.py), the
+suitcase, the phone in the driver's hand, and the phone, cola can and cola bottle lying on the co-driver
+seat (each its own render instance). Each is built the first time a scene needs it (never for scenes that
+do not), then only shown, hidden, moved or recoloured."""
 from __future__ import annotations
 
 import math
@@ -83,22 +84,27 @@ def build_luggage(coll) -> tuple[Group, bpy.types.Material]:
     return g, body_mat
 
 
-def build_phone(coll) -> Group:
-    """A 150 x 72 x 8 mm phone, long axis along local y, lit screen on local +z."""
-    g = Group("phone", coll)
-    pid = INSTANCE_ID["phone"]
+def build_phone(coll, instance: str, screen_on: bool = True) -> Group:
+    """A 150 x 72 x 8 mm phone centred on its origin, long axis along local y, screen on local +z: lit
+    while in use (in the hand), dark glass when it lies unused (on the co-driver seat)."""
+    g = Group(instance, coll)
+    pid = INSTANCE_ID[instance]
     case = M.material("phone_case", (0.01, 0.01, 0.012), roughness=0.3)
-    screen = M.material("phone_screen", (0.02, 0.03, 0.05), roughness=0.1,
-                        emission=(0.35, 0.55, 1.0), emission_strength=1.6)
+    if screen_on:
+        screen = M.material("phone_screen", (0.02, 0.03, 0.05), roughness=0.1,
+                            emission=(0.35, 0.55, 1.0), emission_strength=1.6)
+    else:
+        screen = M.material("phone_screen_off", (0.008, 0.009, 0.011), roughness=0.05, specular=0.9)
     g.add(M.box("phone_body", (0, 0, 0), (0.074, 0.152, 0.009), case, coll, pid, rounded=0.15))
     g.add(M.box("phone_screen", (0, 0, 0.0047), (0.066, 0.140, 0.001), screen, coll, pid))
     return g
 
 
-def build_cola_bottle(coll) -> Group:
-    """A 1 l cola bottle (dark liquid, red label), 0.30 m tall."""
-    g = Group("cola_bottle", coll)
-    pid = INSTANCE_ID["cola_bottle"]
+def build_cola_bottle(coll, instance: str) -> Group:
+    """A 1 l cola bottle (dark liquid, red label), 0.29 m long from the base (origin) along local +z,
+    0.089 m across the label."""
+    g = Group(instance, coll)
+    pid = INSTANCE_ID[instance]
     liquid = M.material("cola", (0.04, 0.012, 0.005), roughness=0.08, specular=0.9)
     label = M.material("cola_label", (0.6, 0.01, 0.01), roughness=0.5)
     cap = M.material("cola_cap", (0.6, 0.01, 0.01), roughness=0.4)
@@ -110,10 +116,10 @@ def build_cola_bottle(coll) -> Group:
     return g
 
 
-def build_can(coll) -> Group:
-    """A 330 ml drink can: red with silver ends."""
-    g = Group("can", coll)
-    pid = INSTANCE_ID["can"]
+def build_can(coll, instance: str) -> Group:
+    """A 330 ml cola can, red with silver ends, 0.118 m tall from the base (origin), 0.066 m across."""
+    g = Group(instance, coll)
+    pid = INSTANCE_ID[instance]
     red = M.material("can_red", (0.55, 0.01, 0.01), roughness=0.25, metallic=0.6)
     silver = M.material("can_top", (0.6, 0.6, 0.62), roughness=0.2, metallic=1.0)
     g.add(M.cylinder("can_body", (0, 0, 0.01), 0.033, 0.10, red, coll, pid))
@@ -122,7 +128,17 @@ def build_can(coll) -> Group:
     return g
 
 
+def build_phone_lying(coll, instance: str) -> Group:
+    return build_phone(coll, instance, screen_on=False)
+
+
 # ---------------------------------------------------------------------- what a scene asks for
+# the things on the co-driver seat: feature -> (asset part, builder); the feature names the instance too
+ON_CODRIVER_SEAT = {"phone_codriver_seat": ("phone", build_phone_lying),
+                    "colacan_codriver_seat": ("colacan", build_can),
+                    "colabottle_codriver_seat": ("colabottle", build_cola_bottle)}
+
+
 class Objects:
     def __init__(self, rig: dict, coll, importer=None):
         self.rig, self.coll = rig, coll
@@ -131,10 +147,13 @@ class Objects:
         self.groups: dict[str, Group] = {}
         self.luggage_mat = None
 
-    def _group(self, key: str, build) -> Group:
+    def _group(self, key: str, build, part: str | None = None) -> Group:
+        """The group for ``key`` (built on first use); ``part`` names the rig asset that may replace the
+        procedural build (default: the key up to its colon, which also names the render instance)."""
         if key not in self.groups:
-            part = key.split(":")[0]
-            asset = self.importer(part) if self.importer else None
+            asset = self.importer(part or key.split(":")[0]) if self.importer else None
+            if asset is not None:
+                _label(asset, key.split(":")[0])
             self.groups[key] = asset or build()
         return self.groups[key]
 
@@ -146,9 +165,9 @@ class Objects:
     def apply(self, f: dict, hand_pose) -> None:
         self._child_seat(f)
         self._luggage(f)
-        self._phone(f, hand_pose)
-        self._simple("cola_bottle", f.get("cola_bottle") == "YES", build_cola_bottle, self.anchors["cola_bottle"])
-        self._simple("can", f.get("can") == "YES", build_can, self.anchors["can"])
+        self._phone_in_hand(hand_pose)
+        for feature, (part, build) in ON_CODRIVER_SEAT.items():
+            self._on_codriver_seat(feature, f.get(feature) == "YES", part, build)
 
     def _child_seat(self, f: dict) -> None:
         if f.get("child_seat") != "YES":
@@ -180,25 +199,27 @@ class Objects:
         group.place(anchor, (0, 0, math.radians(f["luggage_orientation"])))
         group.show(True)
 
-    def _phone(self, f: dict, hand_pose) -> None:
-        in_hand = hand_pose is not None
-        if f.get("phone") != "YES" and not in_hand:
-            self._show_only("phone", None)
+    def _phone_in_hand(self, hand_pose) -> None:
+        if hand_pose is None:
+            self._show_only("phone:", None)
             return
-        group = self._group("phone", lambda: build_phone(self.coll))
-        if in_hand:
-            point, position = hand_pose
-            group.place(point, euler_deg(self.rig["phone_positions"][position]["rotation_deg"]))
-        else:
-            taken = f.get("child_seat") == "YES" or (f.get("luggage") == "YES" and f.get("luggage_position") == "PASSENGER")
-            anchor = self.anchors["phone_loose_alt" if taken else "phone_loose"]
-            group.place(anchor + Vector((0, 0, 0.006)), (0, 0, math.radians(75)))
+        group = self._group("phone:hand", lambda: build_phone(self.coll, "phone"))
+        point, position = hand_pose
+        group.place(point, euler_deg(self.rig["phone_positions"][position]["rotation_deg"]))
         group.show(True)
 
-    def _simple(self, key: str, present: bool, build, anchor: Vector) -> None:
+    def _on_codriver_seat(self, feature: str, present: bool, part: str, build) -> None:
         if not present:
-            self._show_only(key, None)
+            self._show_only(feature, None)
             return
-        group = self._group(key, lambda: build(self.coll))
-        group.place(anchor, (0, 0, 0))
+        group = self._group(feature, lambda: build(self.coll, feature), part)
+        spot = self.rig["codriver_seat"][feature]
+        group.place(Vector(spot["position"]), euler_deg(spot["rotation_deg"]))
         group.show(True)
+
+
+def _label(group: Group, instance: str) -> None:
+    """An imported asset shows in the segmentation as the instance it stands for (the phone model
+    serves both the hand and the seat)."""
+    for obj in group.parts:
+        obj.pass_index = INSTANCE_ID[instance]

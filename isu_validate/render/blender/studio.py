@@ -160,6 +160,23 @@ class Studio:
         self.board.root.matrix_world = Matrix.Translation(Vector(spec["position"])) @ Matrix(spec["rotation"]).to_4x4()
         self.board.show(True)
 
+    def bounds(self) -> dict[str, list[list[float]]]:
+        """World-space axis-aligned box [min, max] of every render instance that shows (cabin frame,
+        metres): lets the host check where things stand without rendering."""
+        bpy.context.view_layer.update()
+        names = {i: name for name, i in INSTANCE_ID.items()}
+        boxes: dict[str, list[list[float]]] = {}
+        for obj in self.scene.objects:
+            if obj.type != "MESH" or obj.hide_render or obj.pass_index not in names:
+                continue
+            corners = [obj.matrix_world @ Vector(c) for c in obj.bound_box]
+            lo = [min(c[k] for c in corners) for k in range(3)]
+            hi = [max(c[k] for c in corners) for k in range(3)]
+            box = boxes.setdefault(names[obj.pass_index], [lo, hi])
+            box[0] = [min(a, b) for a, b in zip(box[0], lo)]
+            box[1] = [max(a, b) for a, b in zip(box[1], hi)]
+        return boxes
+
     def render(self, exr_path: str) -> dict:
         t0 = time.perf_counter()
         bpy.ops.render.render(write_still=False)
