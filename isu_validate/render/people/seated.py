@@ -93,7 +93,7 @@ def _sit(body: Body, rig: dict, shift: float) -> tuple[dict, Posed]:
     turn = anny_to_cabin() @ rot_x(-RECLINE_DEG)
     t = np.array([seat["cushion"][0] - 0.12, seat["cushion"][1], seat["cushion"][2] + 0.10])
     lower_legs = bone_weights(body.model, ("lowerleg", "foot", "toe")) > 0.5
-    for _ in range(3):   # legs follow the hips, the hips rest on what the legs leave: settle in turns
+    for _ in range(4):   # legs follow the hips, the hips rest on what the legs leave: settle in turns
         deltas = {**base, "root": rigid(turn, t)}
         deltas.update(_legs(body.evaluate(deltas), rig))
         t = t + _settle(body.evaluate(deltas).vertices, boxes, lower_legs)
