@@ -147,7 +147,8 @@ class BlenderRenderer:
         box (min, max corner) in the cabin frame, metres. For checking a rig's geometry."""
         features = {**DEFAULTS, **self.space.check(scene)}
         try:
-            reply = self._ensure_worker().request({"op": "bounds", "features": features}, self.timeout_s)
+            reply = self._ensure_worker().request({"op": "bounds", "features": features,
+                                                   "people": self._people_for(features, {})}, self.timeout_s)
         except (WorkerCrashed, WorkerTimeout, WorkerFailed) as exc:
             raise RenderError(f"Blender could not place this scene: {exc} (log: {self.log_path})") from exc
         return {name: (box[0], box[1]) for name, box in reply["bounds"].items()}
@@ -195,8 +196,7 @@ class BlenderRenderer:
     def _render_once(self, features: dict, out: Path, extras: dict, tag: str, parts: list[str],
                      developed: dict | None = None):
         t_people = time.perf_counter()
-        people = self.people.for_scene(features, with_driver=not extras.get("hide_driver")) if self.show_people \
-            else {"driver": None, "child": None}
+        people = self._people_for(features, extras)
         people_s = time.perf_counter() - t_people
         worker = self._ensure_worker()
         self._count += 1
@@ -222,6 +222,12 @@ class BlenderRenderer:
         if parts:
             timings["footprint_s"] = reply["footprint_s"]
         return paths, visible, footprints, timings
+
+    def _people_for(self, features: dict, extras: dict) -> dict:
+        """The host's posed driver and child files for the worker (None: absent)."""
+        if not self.show_people:
+            return {"driver": None, "child": None}
+        return self.people.for_scene(features, with_driver=not extras.get("hide_driver"))
 
     def _developer(self, tag: str, developed: dict):
         """The post-render step: linear light through the camera's imaging model (or plain sRGB).

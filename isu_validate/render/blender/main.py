@@ -36,7 +36,7 @@ def main() -> int:
             elif op == "render":
                 reply = _render(studio, request)
             elif op == "bounds":
-                studio.apply(request["features"], request.get("extras", {}))
+                studio.apply(request["features"], request.get("extras", {}), request.get("people", {}))
                 reply = {"bounds": studio.bounds()}
             elif op == "ping":
                 reply = {}
