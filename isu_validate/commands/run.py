@@ -32,7 +32,9 @@ def add_run_options(p) -> None:
     p.add_argument("--sut", default="reference", help="reference | openai:MODEL@BASE_URL | command:PROG ARGS | http:URL")
     p.add_argument("--mode", choices=["vqa", "vc"], default="vqa", help="visual question answering or captioning")
     p.add_argument("--space", default="isu-paper", help="scene space: shipped name or TOML path")
-    p.add_argument("--algorithm", choices=ALGORITHMS, default="nsga2")
+    p.add_argument("--algorithm", choices=ALGORITHMS, default=ALGORITHMS[0],
+                   help="surrogate (default: surrogate-assisted, learns where the SUT errs), nsga2 (the paper's "
+                        "NSGA-II, for replication), rs (random search, the baseline)")
     p.add_argument("--pop-size", type=int, default=10)
     p.add_argument("--budget", type=int, help=f"number of tests (default {DEFAULT_BUDGET}; with --resume: extend the budget)")
     p.add_argument("--budget-time", type=float, help="wall-clock budget in seconds (instead of, or with, --budget)")

@@ -37,7 +37,7 @@ class RunError(RuntimeError):
 @dataclass
 class RunConfig:
     pipeline: PipelineConfig
-    algorithm: str = "nsga2"
+    algorithm: str = "surrogate"
     pop_size: int = 10
     seed: int = 1
     budget_tests: int | None = 40
@@ -128,7 +128,7 @@ def run_search(config: RunConfig, resume: bool = False, progress_stream=None) ->
                 break
             records = _evaluate_generation(config, generation, scenes, space, diversity, archive, executor,
                                            progress, summary)
-            algorithm.tell(np.array([_objectives(r) for r in records]))
+            algorithm.tell(np.array([_objectives(r) for r in records]), records)
             archive.set_meta("elapsed_s", elapsed_before + time.monotonic() - session_start)
             generation += 1
             summary.generations = generation
