@@ -132,7 +132,7 @@ def test_the_bench_prints_every_threshold_the_goal_and_writes_json(tmp_path, cap
     assert main(["bench", "effectiveness", "--suts", "blind-spots", "--seeds", "2", "--budget", "24",
                  "--pop-size", "8", "--json", str(out)]) == 0
     text = capsys.readouterr().out
-    for needle in ("SUT blind-spots", "surrogate/rs", "nsga2/rs", "RQ2", "entropy", "search time per test",
+    for needle in ("SUT blind-spots", "surrogate/rs", "nsga2/rs", "RQ2", "entropy", "time per test",
                    "goal at threshold"):
         assert needle in text, needle
     data = json.loads(out.read_text())
@@ -163,3 +163,22 @@ def test_the_pipeline_mode_writes_runs_that_resume_and_report(tmp_path, capsys):
         assert len(list((run / "images").glob("*.png"))) == 4
     assert main(args + ["--budget", "4", "--preset", "standard"]) == 2  # other settings: refused, not remeasured
     assert "different configuration" in capsys.readouterr().err
+
+
+def test_bench_search_splits_the_search_from_the_durable_commit(capsys):
+    assert main(["bench", "search", "--sizes", "60,120", "--pop-size", "20", "--algorithm", "surrogate,rs"]) == 0
+    out = capsys.readouterr().out
+    assert out.count("search overhead") == 2 and "(surrogate, pop 20" in out and "(rs, pop 20" in out
+    rows = [line.split() for line in out.splitlines() if line.strip().startswith(("60 ", "120 "))]
+    assert len(rows) == 4
+    for size, total, search, commit, cpu, *_ in rows:
+        assert float(search) + float(commit) <= float(total) + 1e-6 and float(cpu) > 0
+
+
+def test_diagnosis_compares_nsga2_with_its_causes_removed_and_traces_generations(capsys):
+    assert main(["bench", "effectiveness", "--diagnose", "--suts", "blind-spots", "--seeds", "1", "--budget", "30",
+                 "--pop-size", "10", "--pop-sizes", "15"]) == 0
+    out = capsys.readouterr().out
+    for needle in ("nsga2, diversity objective at 0", "nsga2, mutation 1/n per feature", "nsga2 (pop 15)",
+                   "features changed vs nearest parent", "random top-ups", "surviving population passing"):
+        assert needle in out, needle

@@ -91,7 +91,11 @@ class _Leaves:
     counts: np.ndarray         # per tree node: number of tests there
 
     def leaves(self, X: np.ndarray) -> np.ndarray:
-        return np.zeros(len(X), dtype=np.intp) if self.tree is None else self.tree.apply(X)
+        if self.tree is None:
+            return np.zeros(len(X), dtype=np.intp)
+        # the fitted tree_ itself: the estimator's apply() re-validates its input on every call,
+        # which cost more than the lookup; rows here are always float32 and C-contiguous
+        return self.tree.tree_.apply(np.ascontiguousarray(X, dtype=np.float32))
 
     def add(self, X: np.ndarray, y: np.ndarray) -> None:
         leaves = self.leaves(X)

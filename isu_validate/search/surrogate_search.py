@@ -8,12 +8,13 @@ Each generation (after a first one of random scenes):
 2. pymoo's operators breed a pool of candidates many times larger than a generation:
    crossover + mutation of parent pairs, mutation alone (failure-seeded local search),
    and fresh random scenes (exploration); every one valid, none tested before;
-3. each slot of the generation goes to the candidate with the lowest fitness under one
-   posterior draw of the surrogate (batch Thompson sampling), credited for novelty: its
-   distance to the nearest scene tested or already chosen, relative to the pool's
-   median so the credit does not fade as the archive fills up.  Confident weaknesses are
-   exploited, uncertain regions still get tried, and failures spread over the space
-   instead of piling onto one region.
+3. each slot of the generation draws the surrogate once from its posterior (batch
+   Thompson sampling) and, among the candidates with the lowest fitness under that
+   draw, takes the one farthest from every failure found so far and every candidate
+   chosen before it.  Confident weaknesses are exploited, uncertain regions still get
+   tried, and the failures spread over the space instead of piling onto one region
+   (the RQ2 entropy of failure clusters) without a diversity objective that would
+   compete with the fitness for selection.
 
 Rendering a scene costs seconds and a real VLM call money; screening a candidate costs
 microseconds.  Randomness flows from the seed only (one numpy Generator), so a resumed
@@ -27,11 +28,11 @@ from .algorithms import SearchAlgorithm
 from .breeding import Breeder
 from .surrogate import ErrorModel, record_targets
 
-POOL_PER_SLOT, POOL_MAX = 20, 400       # candidates screened per scene tested, and at most per generation
+POOL_PER_SLOT, POOL_MAX = 16, 240       # candidates screened per scene tested, and at most per generation
 POOL_SHARES = (0.4, 0.3, 0.3)           # bred (crossover), local (mutation only), random
 LOCAL_MUTATIONS = 1.5                   # features a local move changes on average
-NOVELTY_WEIGHT = 0.2                    # loss credited per pool-median of novelty
-NOVELTY_REFERENCE = 1000                # tested scenes the novelty is measured against (most recent)
+TOP_SHARE = 0.3                         # a slot picks the most novel of this share of the pool, best first
+NOVELTY_REFERENCE = 500                 # failing tests the novelty is measured against (most recent)
 
 
 class SurrogateSearch(SearchAlgorithm):
@@ -45,6 +46,7 @@ class SurrogateSearch(SearchAlgorithm):
         self.local = Breeder(space, mutations=LOCAL_MUTATIONS)
         self.tested: list[dict] = []            # full scenes with a verdict, in test order (as the model's rows)
         self._tested_rows = np.zeros((0, len(space.names)), dtype=np.float32)   # their distance rows
+        self._failing = np.zeros(0, dtype=bool)                                  # and whether they failed
         self._pending: list[dict] = []
 
     # ------------------------------------------------------------------ ask
@@ -73,31 +75,39 @@ class SurrogateSearch(SearchAlgorithm):
         chosen = list(pool.values())
         return chosen, [self.space.canonical(s) for s in chosen]
 
-    def _parents(self, k: int) -> list[dict]:
-        """The tested scenes the surrogate expects to fail worst (noise-discounted elitism)."""
+    def _parents(self, k: int, rng: np.random.Generator | None = None) -> list[dict]:
+        """The tested scenes the surrogate expects to fail worst (noise-discounted elitism);
+        ties broken at random."""
         loss = self.model.observed_loss()
-        order = np.lexsort((self.rng.random(len(loss)), -loss))
+        order = np.lexsort(((rng or self.rng).random(len(loss)), -loss))
         return [self.tested[i] for i in order[:k]]
 
     def _choose(self, pool: list[dict], canonical: list[dict], n: int) -> list[dict]:
+        """Per slot: of the pool's best ``TOP_SHARE`` under one posterior draw, the candidate
+        farthest from every failure found so far and every candidate already chosen."""
         if not pool:
             return []
         draws = self.model.sample_loss(canonical, min(n, len(pool)))
         rows = self._distance_rows(canonical)
-        novelty = _nearest(rows, self._tested_rows[-NOVELTY_REFERENCE:])
-        scale = max(float(np.median(novelty)), 1e-6)
+        novelty = _nearest(rows, self._tested_rows[self._failing][-NOVELTY_REFERENCE:])
+        novelty += 1e-9 * self.rng.random(len(pool))  # ties (no failure yet) broken at random
+        top_k = max(1, int(np.ceil(TOP_SHARE * len(pool))))
         chosen: list[int] = []
         for draw in draws:
-            score = draw + NOVELTY_WEIGHT * novelty / scale + 1e-9 * self.rng.random(len(pool))
-            score[chosen] = -np.inf
-            best = int(np.argmax(score))
+            loss = draw + 1e-9 * self.rng.random(len(pool))
+            loss[chosen] = -np.inf
+            top = np.argpartition(-loss, min(top_k, len(pool) - 1))[:top_k]
+            top = top[np.isfinite(loss[top])]
+            best = int(top[np.argmax(novelty[top])])
             chosen.append(best)
             novelty = np.minimum(novelty, self.space.distances_sentinel(rows[best], rows))
         return [pool[i] for i in chosen]
 
     def _distance_rows(self, canonical: list[dict]) -> np.ndarray:
-        vectors = np.array([self.space.canonical_vector(c) for c in canonical]).reshape(len(canonical), -1)
-        return self.space.distance_rows(vectors)
+        """The diversity measure's rows (``SceneSpace.canonical_vector`` of scenes already canonical)."""
+        features = self.space.features.items()
+        vectors = np.array([[f.encode(c[n]) if n in c else np.nan for n, f in features] for c in canonical])
+        return self.space.distance_rows(vectors.reshape(len(canonical), len(self.space.names)))
 
     # ------------------------------------------------------------------ tell
     def tell(self, F: np.ndarray, records: list | None = None) -> None:
@@ -112,12 +122,15 @@ class SurrogateSearch(SearchAlgorithm):
         canonical = [self.space.canonical(s) for s in kept]
         self.model.observe(canonical, [t for t in targets if t is not None])
         self.tested += kept
+        failing = [max(t.values()) > 0 for t in targets if t is not None]  # any answer wrong
+        self._failing = np.concatenate([self._failing, np.array(failing, dtype=bool)])
         if kept:
             self._tested_rows = np.concatenate([self._tested_rows, self._distance_rows(canonical)])
 
     @property
     def population(self) -> list[dict]:
-        return self._parents(self.pop_size) if self.tested else []
+        """The current elite (looking at it must not move the search's RNG)."""
+        return self._parents(self.pop_size, np.random.default_rng(0)) if self.tested else []
 
 
 def _nearest(rows: np.ndarray, reference: np.ndarray, chunk: int = 64) -> np.ndarray:

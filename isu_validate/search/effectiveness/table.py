@@ -34,7 +34,8 @@ def format_summary(s: SutSummary) -> str:
         for algo in others:
             c = by_key.get((t, algo))
             if c:
-                row += f"  {_num(c['ratio'], '.2f') + 'x':>13} {_num(c['p'], '.2g'):>8} {_num(c['A12'], '.2f'):>5}"
+                ratio = _num(c["ratio"], ".2f") + ("x" if math.isfinite(c["ratio"]) else "")
+                row += f"  {ratio:>13} {_num(c['p'], '.2g'):>8} {_num(c['A12'], '.2f'):>5}"
         lines.append(row)
     lines.append("")
     if s.diversity:
@@ -49,7 +50,7 @@ def format_summary(s: SutSummary) -> str:
             lines.append(f"    {t['algorithm']} vs {s.baseline} {t['measure']}: p {_num(t['p'], '.2g')}, "
                          f"A12 {_num(t['A12'], '.2f')}")
     if any(math.isfinite(v) for v in s.search_ms.values()):
-        lines.append("  search time per test (ask + diversity + tell): " +
+        lines.append("  search CPU time per test (ask + diversity + tell, this thread): " +
                      ", ".join(f"{a} {_num(v, '.2f')} ms" for a, v in s.search_ms.items()))
     lines += _goal_lines(s)
     return "\n".join(lines)
