@@ -14,4 +14,6 @@ One module per concept:
   camera file contract (TOML, JSON, mrcal ``.cameramodel``); ``registration``: the camera's
   pose in the cabin from ArUco markers.
 - ``synthetic``: data with a known truth (tests, ``bench calib``); ``bench``: ``bench calib``.
+- ``camera_model/``: the camera's imaging model (auto-exposure, response, noise, colour) kept in the
+  camera file: fitted from captures, applied to renders (``isu-validate exposure``, ``bench exposure``).
 """

@@ -3,13 +3,14 @@
 Layout: ``name``; ``[image] width height``; ``[intrinsics] model fx fy cx cy distortion``;
 ``[extrinsics] position rotation`` (R_cabin_from_camera: columns are the camera's OpenCV
 x right, y down, z forward axes in cabin coordinates); ``[quality]`` and the optional
-``[calibration]`` provenance.  The renderer's ``isu_validate.render.camera`` loads the
+``[calibration]`` provenance; the optional imaging model ``[exposure]``, ``[response]``,
+``[noise]``, ``[colour]`` (see ``camera_model/model.py``; a file without them renders as before).
+The renderer's ``isu_validate.render.camera`` loads the
 same files; a calibrated file drops into ``rigs/cameras/`` unchanged.
 """
 from __future__ import annotations
 
 import json
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -18,6 +19,8 @@ import numpy as np
 import tomli_w
 
 from . import lens
+from .camera_model.model import ImagingModel, plain
+from .camera_model.model import from_dict as imaging_from_dict
 from isu_validate.tomlfile import read_toml as read_toml_file
 
 # A camera at the cabin origin looking forward (+x), image x to the cabin's right (-y),
@@ -42,6 +45,7 @@ class CameraModel:
     quality: dict = field(default_factory=dict)
     calibration: dict = field(default_factory=dict)
     registration: dict = field(default_factory=dict)
+    imaging: ImagingModel | None = None          # exposure, response, noise, colour (optional)
 
     @property
     def size(self) -> tuple[int, int]:
@@ -67,23 +71,9 @@ class CameraModel:
             out["quality"] = self.quality
         if self.calibration:
             out["calibration"] = self.calibration
-        return _plain(out)
-
-
-def _plain(value):
-    """numpy scalars and arrays to TOML/JSON-writable Python values; NaN/inf become strings."""
-    if isinstance(value, dict):
-        return {str(k): _plain(v) for k, v in value.items() if v is not None}
-    if isinstance(value, (list, tuple, np.ndarray)):
-        return [_plain(v) for v in value]
-    if isinstance(value, (np.integer,)):
-        return int(value)
-    if isinstance(value, (float, np.floating)):
-        v = float(value)
-        return v if math.isfinite(v) else str(v)  # TOML allows nan/inf, JSON does not: keep both readable
-    if isinstance(value, (np.bool_,)):
-        return bool(value)
-    return value
+        if self.imaging is not None:
+            out.update(self.imaging.to_dict())
+        return plain(out)
 
 
 def write_toml(camera: CameraModel, path: str | Path) -> Path:
@@ -120,7 +110,7 @@ def from_dict(raw: dict, where: str = "<camera>") -> CameraModel:
     return CameraModel(str(raw.get("name", Path(where).stem)), model, width, height, np.array(values + dist),
                        tuple(extr.get("position", (0.0, 0.0, 0.0))), tuple(tuple(r) for r in rotation),
                        bool(extr.get("registered", "position" in extr)), raw.get("quality", {}),
-                       raw.get("calibration", {}), extr.get("registration", {}))
+                       raw.get("calibration", {}), extr.get("registration", {}), imaging_from_dict(raw, where))
 
 
 def _distortion_for(model: str, dist: list[float], where: str) -> list[float]:
@@ -134,6 +124,24 @@ def _distortion_for(model: str, dist: list[float], where: str) -> list[float]:
     if len(dist) != need:
         raise CameraFileError(f"{where}: model {model!r} takes {need} distortion coefficients, got {len(dist)}")
     return dist
+
+
+def write_imaging(source: str | Path, imaging: ImagingModel, out: str | Path, note: str = "") -> Path:
+    """Copy the camera file ``source`` to ``out`` with its imaging tables replaced by ``imaging``'s;
+    everything else (intrinsics, pose, calibration provenance) is kept as it was."""
+    raw = read_toml_file(source, CameraFileError, "camera file")
+    from_dict(raw, str(source))   # a broken input is named before anything is written
+    for section in ("exposure", "response", "noise", "colour"):
+        raw.pop(section, None)
+    raw.update(plain(imaging.to_dict()))
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    header = (f"# Camera file from {source} with its imaging model{note} (layout: capture/camera_file.py,\n"
+              "# capture/camera_model/model.py). Comments of the source file are not carried over.\n")
+    tmp = out.with_name(f".{out.name}.tmp")
+    tmp.write_text(header + tomli_w.dumps(raw))
+    tmp.replace(out)
+    return out
 
 
 # ---------------------------------------------------------------- mrcal

@@ -10,6 +10,12 @@ import glob
 import os
 
 LUXONIS_VENDOR_ID = 0x03E7
+# why each look may come back empty: reported (text and JSON alike) when no camera at all was found
+NOT_FOUND = {
+    "v4l2": "no /dev/video* devices (is a USB camera plugged in? in a container, pass --device /dev/videoN)",
+    "depthai": "no DepthAI devices (USB3 cable; udev rule for vendor 03e7; in a container -v /dev/bus/usb:/dev/bus/usb)",
+    "usb": "no USB devices with Luxonis vendor id 03e7",
+}
 
 
 def list_v4l2() -> list[dict]:
@@ -75,15 +81,18 @@ def list_luxonis_usb() -> tuple[list[dict], str | None]:
 
 
 def list_cameras() -> dict:
+    """Every camera found, and ``problems``: what to check, the same list text and JSON output show."""
     depthai, depthai_problem = list_depthai()
     usb, usb_problem = list_luxonis_usb()
-    problems = [p for p in (depthai_problem, usb_problem) if p]
-    return {"v4l2": list_v4l2(), "depthai": depthai, "usb": usb, "problems": problems}
+    found = {"v4l2": list_v4l2(), "depthai": depthai, "usb": usb}
+    problems = [] if any_camera(found) else list(NOT_FOUND.values())
+    found["problems"] = problems + [p for p in (depthai_problem, usb_problem) if p]
+    return found
+
+
+def any_camera(found: dict) -> bool:
+    return any(found.get(kind) for kind in NOT_FOUND)
 
 
 def none_found_message(found: dict) -> str:
-    lines = ["no cameras found:",
-             "- no /dev/video* devices (is a USB camera plugged in? in a container, pass --device /dev/videoN)",
-             "- no DepthAI devices (USB3 cable; udev rule for vendor 03e7; in a container -v /dev/bus/usb:/dev/bus/usb)",
-             "- no USB devices with Luxonis vendor id 03e7"]
-    return "\n".join(lines + [f"- {p}" for p in found.get("problems", [])])
+    return "\n".join(["no cameras found:"] + [f"- {p}" for p in found.get("problems", [])])

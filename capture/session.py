@@ -11,10 +11,11 @@ import json
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Callable
 
 import cv2
 
-from .sources import CaptureError, ExposureRequest, FrameSource
+from .sources import CaptureError, ExposureRequest, Frame, FrameSource
 
 
 @dataclass
@@ -39,14 +40,21 @@ def _atomic_write_png(path: Path, image) -> None:
 
 
 def shoot(source: FrameSource, n_frames: int, out: str | Path, request: ExposureRequest = ExposureRequest(),
-          progress=None) -> Session:
-    """Take ``n_frames`` frames into ``out``; raises CaptureError (frames kept) when the camera fails."""
+          progress=None, first_index: int | None = None, annotate: Callable[[Path, Frame], dict] | None = None
+          ) -> Session:
+    """Take ``n_frames`` frames into ``out``; raises CaptureError (frames kept) when the camera fails.
+
+    ``first_index``: add to the frames already in ``out``, numbering on from there (a pair's ``real/``),
+    with this session's record in ``session_<first>.json``; otherwise ``out`` must hold no frames.
+    ``annotate(path, frame)``: called once each frame is on disk; what it returns joins the sidecar."""
     if n_frames <= 0:
         raise ValueError(f"--frames must be positive, got {n_frames}")
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    if any(out.glob("frame_*.png")):
+    if first_index is None and any(out.glob("frame_*.png")):
         raise ValueError(f"{out} already holds frames from another session; choose a new --out folder")
+    start = first_index or 0
+    record_name = "session.json" if first_index is None else f"session_{start:04d}.json"
     session = Session(out)
     record = {"source": source.spec, "requested": {"frames": n_frames, "exposure_us": request.exposure_us,
                                                    "iso": request.iso, "auto_exposure": request.auto},
@@ -57,7 +65,7 @@ def shoot(source: FrameSource, n_frames: int, out: str | Path, request: Exposure
         record["status"] = status
         record["frames"] = [p.name for p in session.frames]
         record["error"] = session.error
-        _atomic_write_text(out / "session.json", json.dumps(record, indent=2))
+        _atomic_write_text(out / record_name, json.dumps(record, indent=2))
 
     save("running")
     try:
@@ -65,9 +73,11 @@ def shoot(source: FrameSource, n_frames: int, out: str | Path, request: Exposure
             session.warnings += source.set_exposure(request)
             for i in range(n_frames):
                 frame = source.read()
-                path = out / f"frame_{i:04d}.png"
+                path = out / f"frame_{start + i:04d}.png"
                 _atomic_write_png(path, frame.image)
                 meta = dict(frame.meta, frame=path.name, requested=record["requested"])
+                if annotate:
+                    meta.update(annotate(path, frame))
                 _atomic_write_text(path.with_suffix(".json"), json.dumps(meta, indent=2, default=str))
                 session.frames.append(path)
                 for w in meta.get("warnings", []):

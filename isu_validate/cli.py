@@ -18,6 +18,9 @@ COMMAND_MODULES = [
     "stylize",    # stylize (gatys|fast), stylize train
     "capture",    # capture list|shoot (V4L2, DepthAI, replay)
     "calibrate",  # calibrate IMAGES..., calibrate diff|register
+    "recreate",   # recreate RUN...: pairs and printable recreation sheets for a lab
+    "agree",      # agree PAIRS: sim/real agreement report; agree votes: validity votes
+    "exposure",   # exposure fit|apply|chart|colour|check (the camera's imaging model)
 ]
 
 
@@ -58,7 +61,7 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("interrupted; everything evaluated so far is saved (resume with --resume)", file=sys.stderr)
         return 130
-    except (UserError, FileNotFoundError, ValueError) as exc:  # SpaceError is a ValueError
+    except (UserError, FileNotFoundError, ValueError) as exc:  # SpaceError, PairsError are ValueErrors
         print(f"isu-validate {args.command}: error: {exc}", file=sys.stderr)
         return 2
 

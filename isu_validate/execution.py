@@ -1,7 +1,10 @@
 """Where a generation's tests are evaluated: in this process, a local process pool, or Dask.
 
 Each executor yields records as they complete, so the run loop commits every test the
-moment it exists (nothing is lost when the run is killed mid-generation).
+moment it exists (nothing is lost when the run is killed mid-generation).  Making an
+executor checks the pipeline (every component is built once before the run writes
+anything) and, for Dask, reaches the scheduler; ``cancel_pending`` drops the jobs not
+yet started when the run must stop; ``close`` leaves no renderer running behind.
 """
 from __future__ import annotations
 
@@ -11,7 +14,7 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Iterable, Iterator
 
 from .archive import TestRecord
-from .pipeline import Job, PipelineConfig, close_pipelines, evaluate_job
+from .pipeline import Job, PipelineConfig, check_pipeline, close_pipeline, close_pipelines, evaluate_job, open_pipeline
 
 DASK_CONNECT_TIMEOUT_S = 10
 
@@ -21,13 +24,21 @@ class InProcessExecutor:
 
     def __init__(self, config: PipelineConfig):
         self.config = config
+        open_pipeline(config)  # built now (a bad setting fails here), then used for every job
+        self._cancelled = False
 
     def run(self, jobs: Iterable[Job]) -> Iterator[TestRecord]:
+        self._cancelled = False
         for job in jobs:
+            if self._cancelled:
+                return
             yield evaluate_job(self.config, job)
 
+    def cancel_pending(self) -> None:
+        self._cancelled = True
+
     def close(self) -> None:
-        close_pipelines()
+        close_pipeline(self.config)
 
 
 class LocalPoolExecutor:
@@ -35,14 +46,21 @@ class LocalPoolExecutor:
 
     def __init__(self, config: PipelineConfig, workers: int):
         self.config = config
+        check_pipeline(config)  # here, where an error is one clear line, before any worker starts
         # spawn, not fork: torch and the renderer's pipes do not survive a fork cleanly
         self.pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
                                         initializer=_close_at_exit)
+        self._futures: list = []
 
     def run(self, jobs: Iterable[Job]) -> Iterator[TestRecord]:
-        futures = [self.pool.submit(evaluate_job, self.config, job) for job in jobs]
-        for future in as_completed(futures):
-            yield future.result()
+        self._futures = [self.pool.submit(evaluate_job, self.config, job) for job in jobs]
+        for future in as_completed(self._futures):
+            if not future.cancelled():
+                yield future.result()
+
+    def cancel_pending(self) -> None:
+        for future in self._futures:
+            future.cancel()  # only those not yet running: the others finish and are kept
 
     def close(self) -> None:
         self.pool.shutdown(wait=True, cancel_futures=True)
@@ -60,17 +78,32 @@ class DaskExecutor:
         except OSError as exc:
             raise ConnectionError(f"cannot reach the Dask scheduler at {address}: {exc}; "
                                   "start one with `dask scheduler` or drop --cluster") from None
+        try:  # on a worker: its files, its environment (API keys) are what the jobs will see
+            self.client.submit(check_pipeline, config, pure=False).result()
+        except BaseException:
+            self.client.close()
+            raise
+        self._futures: list = []
 
     def run(self, jobs: Iterable[Job]) -> Iterator[TestRecord]:
         from distributed import as_completed as dask_completed
 
-        jobs = list(jobs)
-        futures = [self.client.submit(evaluate_job, self.config, job, pure=False) for job in jobs]
-        for future in dask_completed(futures):
-            yield future.result()
+        self._futures = [self.client.submit(evaluate_job, self.config, job, pure=False) for job in jobs]
+        for future in dask_completed(self._futures):
+            if not future.cancelled():
+                yield future.result()
+
+    def cancel_pending(self) -> None:
+        self.client.cancel([f for f in self._futures if not f.done()])
 
     def close(self) -> None:
-        self.client.close()
+        # each worker keeps one pipeline (and its Blender process) per run configuration: end ours
+        try:
+            self.client.run(close_pipeline, self.config)
+        except Exception:  # noqa: BLE001 - a lost worker or scheduler has nothing left to close;
+            pass           # an error here must not hide the one that ended the run
+        finally:
+            self.client.close()
 
 
 def _close_at_exit() -> None:

@@ -36,6 +36,8 @@ class PipelineConfig:
     sut_timeout_s: float = 60.0
     sut_options: dict = field(default_factory=dict)  # adapter options (never secrets: keys come from env)
     render_threads: int = 0           # Cycles threads per renderer (0 = all cores; split them across workers)
+    extrinsics_from: str | None = None  # camera rig whose cabin pose replaces the camera's own
+    min_visible: dict = field(default_factory=dict)  # visibility thresholds {feature or "*": share} over the space's
     factory: str = "isu_validate.pipeline:build_components"
 
     def to_dict(self) -> dict:
@@ -72,11 +74,23 @@ def build_components(config: PipelineConfig, space: SceneSpace) -> Components:
     run_dir = Path(config.run_dir)
     renderer = open_renderer(preset=config.preset, camera=config.camera, cabin=config.cabin,
                              channels=config.channels, cache_dir=run_dir / "cache" / "render",
-                             log_dir=run_dir / "logs", space=space, threads=config.render_threads)
+                             log_dir=run_dir / "logs", space=space, threads=config.render_threads,
+                             extrinsics_from=config.extrinsics_from, min_visible=config.min_visible)
     sut = open_sut(config.sut, space=space, repeats=config.repeats, cache_dir=run_dir / "cache" / "sut",
                    timeout_s=config.sut_timeout_s, **config.sut_options)
     judge = make_judge(config.mode, space, threshold=config.threshold)
     return Components(renderer, sut, judge, build_request)
+
+
+def check_render_settings(config: PipelineConfig, space: SceneSpace) -> None:
+    """Refuse, before a run writes anything, a camera whose pose was never registered (with the fix)
+    and visibility thresholds that name no feature or lie outside [0, 1]."""
+    from .render import load_render_camera
+    from .render.visibility import min_visible_for, needed_parts
+
+    load_render_camera(config.camera, config.extrinsics_from)
+    needed_parts(space)
+    min_visible_for(space, config.min_visible)
 
 
 def _load_factory(path: str):
@@ -91,14 +105,19 @@ def _load_factory(path: str):
 
 class Pipeline:
     def __init__(self, config: PipelineConfig):
+        """Builds every component, so a bad setting fails here; writes nothing (the run directory
+        may not exist yet: a run checks its pipeline before it writes its first file)."""
         self.config = config
         self.space = load_space(config.space)
         self.run_dir = Path(config.run_dir)
-        for sub in ("images", "labels"):
-            (self.run_dir / sub).mkdir(parents=True, exist_ok=True)
         self.parts: Components = _load_factory(config.factory)(config, self.space)
+        self._dirs_made = False
 
     def evaluate(self, job: Job) -> TestRecord:
+        if not self._dirs_made:
+            for sub in ("images", "labels"):
+                (self.run_dir / sub).mkdir(parents=True, exist_ok=True)
+            self._dirs_made = True
         canonical = self.space.check(job.scene)
         record = TestRecord(test_id=job.test_id, generation=job.generation, index=job.index,
                             algorithm=job.algorithm, seed=job.seed, scene_key=job.scene_key,
@@ -106,14 +125,21 @@ class Pipeline:
         self._write_label(job, canonical)
         image = self._render(record)
         if image is not None:
-            self._ask_and_judge(record, image)
+            self._write_label(job, canonical, record)   # with what the frame shows of each feature
+            hidden = _nothing_to_judge(self.space, canonical, record.occluded)
+            if hidden:
+                record.render_error = hidden   # no verdict, like an error: the SUT is not asked
+            else:
+                self._ask_and_judge(record, image)
         record.created = time.time()
         return record
 
-    def _write_label(self, job: Job, canonical: dict) -> None:
+    def _write_label(self, job: Job, canonical: dict, record: TestRecord | None = None) -> None:
         label = {"test_id": job.test_id, "space": self.space.name, "space_hash": self.space.hash,
                  "scene_key": job.scene_key, "scene": canonical,
                  "truth": {q.key: q.truth for q in self.space.questions(canonical)}}
+        if record is not None:
+            label.update(visibility=record.visibility, occluded=record.occluded)
         (self.run_dir / "labels" / f"{job.test_id}.json").write_text(json.dumps(label, indent=2))
 
     def _render(self, record: TestRecord) -> Path | None:
@@ -124,8 +150,12 @@ class Pipeline:
         except RenderError as exc:
             record.render_error = str(exc) or type(exc).__name__
             record.timings["render_s"] = time.perf_counter() - start
+            if getattr(exc, "image", None):   # an unusable frame (black, saturated...): kept to look at
+                record.image = _relative(exc.image, self.run_dir)
             return None
         record.timings.update({k: float(v) for k, v in result.timings.items()})
+        record.details["visibility"] = dict(getattr(result, "visibility", {}) or {})
+        record.details["occluded"] = list(getattr(result, "occluded", []) or [])
         record.timings["render_s"] = time.perf_counter() - start
         record.details["render_cached"] = bool(result.cached)
         record.details["channels"] = {k: _relative(v, self.run_dir) for k, v in result.channels.items()}
@@ -146,14 +176,24 @@ class Pipeline:
         record.sut_error = response.error
         record.details["problems"] = list(response.problems)
         record.details["sut"] = dict(response.extra)
-        verdict = self.parts.judge.judge(record.canonical, request, response)
+        verdict = self.parts.judge.judge(record.canonical, request, response, occluded=record.occluded)
         record.fitness, record.primary, record.failed = dict(verdict.fitness), verdict.primary, verdict.failed
         record.details["verdict"] = verdict.details
 
     def close(self) -> None:
-        close = getattr(self.parts.renderer, "close", None)
-        if close:
-            close()
+        for part in (self.parts.renderer, self.parts.sut):
+            close = getattr(part, "close", None)
+            if close:
+                close()
+
+
+def _nothing_to_judge(space: SceneSpace, canonical: dict, occluded: list[str]) -> str | None:
+    """Why a frame cannot show anything the SUT would be asked about (every question occluded)."""
+    asked = [q.key for q in space.questions(canonical)]
+    if asked and set(asked) <= set(occluded):
+        return (f"unusable frame: every feature asked about is occluded ({', '.join(asked)}), so the scene has "
+                f"no verdict; see the visible shares in the label (lower --min-visible to judge them anyway)")
+    return None
 
 
 def _relative(path, root: Path) -> str:
@@ -168,11 +208,32 @@ def _relative(path, root: Path) -> str:
 _PIPELINES: dict[str, Pipeline] = {}
 
 
-def evaluate_job(config: PipelineConfig, job: Job) -> TestRecord:
-    key = json.dumps(config.to_dict(), sort_keys=True)
+def _key(config: PipelineConfig) -> str:
+    return json.dumps(config.to_dict(), sort_keys=True)
+
+
+def open_pipeline(config: PipelineConfig) -> Pipeline:
+    """This process's pipeline for ``config``, built on first use."""
+    key = _key(config)
     if key not in _PIPELINES:
         _PIPELINES[key] = Pipeline(config)
-    return _PIPELINES[key].evaluate(job)
+    return _PIPELINES[key]
+
+
+def check_pipeline(config: PipelineConfig) -> None:
+    """Build every component once and close them again: raises what a worker would raise."""
+    Pipeline(config).close()
+
+
+def evaluate_job(config: PipelineConfig, job: Job) -> TestRecord:
+    return open_pipeline(config).evaluate(job)
+
+
+def close_pipeline(config: PipelineConfig) -> None:
+    """End this process's pipeline for ``config`` (its renderer's Blender process with it)."""
+    pipeline = _PIPELINES.pop(_key(config), None)
+    if pipeline is not None:
+        pipeline.close()
 
 
 def close_pipelines() -> None:

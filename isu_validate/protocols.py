@@ -13,7 +13,12 @@ from .space import Question
 
 
 class RenderError(RuntimeError):
-    """A scene could not be rendered (after the renderer's own retry)."""
+    """A scene could not be rendered (after the renderer's own retry), or its frame cannot show the
+    scene (black, saturated, no driver); ``image`` is then the unusable frame, kept for inspection."""
+
+    def __init__(self, message: str = "", image: Path | None = None):
+        super().__init__(message)
+        self.image = image
 
 
 @dataclass
@@ -22,6 +27,8 @@ class RenderResult:
     channels: dict[str, Path] = field(default_factory=dict)  # e.g. {"seg": ..., "depth": ...}
     timings: dict[str, float] = field(default_factory=dict)  # update_s, render_s, write_s, total_s
     cached: bool = False
+    visibility: dict[str, float] = field(default_factory=dict)  # feature -> visible share (things that exist)
+    occluded: list[str] = field(default_factory=list)           # features seen too little to be judged
 
 
 class Renderer(Protocol):

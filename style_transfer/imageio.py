@@ -23,6 +23,16 @@ def load_image(path: str | Path, max_side: int | None = None) -> torch.Tensor:
     return to_tensor(img)
 
 
+def unreadable(path: str | Path) -> str | None:
+    """Why ``path`` cannot be used as an image (decoded in full: a truncated file fails too), or None."""
+    try:
+        with Image.open(path) as img:
+            img.load()
+    except (UnidentifiedImageError, OSError, SyntaxError, ValueError) as exc:
+        return f"{type(exc).__name__}: {exc}"
+    return None
+
+
 def fit(img: Image.Image, max_side: int) -> Image.Image:
     """Scale so the longer side is ``max_side``; keeps aspect, never below 16 px (VGG pools 4x)."""
     scale = max_side / max(img.size)

@@ -114,3 +114,16 @@ def test_a12_magnitudes_vargha_delaney(a12, magnitude):
 def test_a12_with_an_empty_group_is_undefined():
     effect = vargha_delaney([], [1.0])
     assert math.isnan(effect.a12) and effect.magnitude == "undefined"
+
+
+@pytest.mark.parametrize("n1,n2,too_small", [(1, 1, True), (1, 5, True), (2, 2, True), (3, 3, True), (3, 4, True),
+                                             (4, 4, False), (2, 8, False), (10, 10, False)])
+def test_a12_from_too_few_runs_says_the_sample_is_too_small(n1, n2, too_small):
+    """One run per algorithm gives A12 = 0 or 1: 'large' would be noise, not an effect."""
+    x, y = np.arange(n1) * 0.01, 1 + np.arange(n2) * 0.01   # every x below every y
+    effect, test = vargha_delaney(x, y), rank_sum_test(x, y)
+    assert effect.a12 == 0.0
+    assert (effect.magnitude == "sample too small") == too_small
+    assert ("sample too small" in test.note) == too_small
+    if not too_small:
+        assert effect.magnitude == "large" and test.p < 0.05

@@ -80,3 +80,43 @@ def test_markers_not_in_view_or_badly_listed_are_clear_errors(tmp_path):
     bad.write_text('[[markers]]\nid = 1\ncorners = [[0, 0, 0]]\n')
     with pytest.raises(RegistrationError, match="four"):
         load_markers(bad)
+
+
+def test_the_shipped_example_marker_file_registers_the_default_camera(tmp_path):
+    """rigs/markers/example.toml, photographed through the default rig (markers drawn at their listed
+    corners), gives back the default rig's pose through `calibrate register --markers example`."""
+    from isu_validate.paths import rigs_dir
+    from isu_validate.render.camera import load_camera
+
+    rig = load_camera("default")
+    assert rig.model == "pinhole"
+    truth = synthetic.TrueCamera("pinhole", (rig.fx, rig.fy, rig.cx, rig.cy), rig.width, rig.height)
+    R_cabin_cam, position = np.asarray(rig.rotation), np.asarray(rig.position)
+    dictionary, table = load_markers(rigs_dir() / "markers" / "example.toml")
+    assert len(table) >= 2
+    aruco = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, dictionary))
+    photo = np.full((truth.height, truth.width), 120, np.uint8)
+    for marker_id, corners in table.items():
+        side = np.linalg.norm(corners[1] - corners[0])
+        px_per_m = 2000.0
+        n = int(round(side * px_per_m))
+        tex = np.full((2 * n, 2 * n), 255, np.uint8)           # the marker with a white margin
+        tex[n // 2:n // 2 + n, n // 2:n // 2 + n] = cv2.aruco.generateImageMarker(aruco, marker_id, n)
+        x = (corners[1] - corners[0]) / side                    # along the printed rows
+        y = (corners[3] - corners[0]) / np.linalg.norm(corners[3] - corners[0])
+        R_cam_plane = R_cabin_cam.T @ np.column_stack([x, y, np.cross(x, y)])
+        t = R_cabin_cam.T @ (corners[0] - position)
+        views = [synthetic.render_plane(tex, px_per_m, (n // 2, n // 2), truth, cv2.Rodrigues(R_cam_plane)[0], t,
+                                        background=b) for b in (0, 255)]
+        hit = np.abs(views[0].astype(int) - views[1].astype(int)) < 128   # where the plane is, not the background
+        photo[hit] = views[0][hit]
+    cv2.imwrite(str(tmp_path / "photo.png"), photo)
+    camera = CameraModel("cam", "pinhole", truth.width, truth.height, np.array(truth.intrinsics, dtype=float))
+    write_toml(camera, tmp_path / "cam.toml")
+    assert main(["calibrate", "register", str(tmp_path / "cam.toml"), str(tmp_path / "photo.png"),
+                 "--markers", "example", "--out", str(tmp_path / "reg.toml")]) == 0
+    registered = read_toml(tmp_path / "reg.toml")
+    assert registered.registration["markers"] == sorted(table)              # every marker seen
+    assert np.linalg.norm(np.asarray(registered.position) - position) < 0.02  # within 2 cm (mm-rounded corners)
+    dR = np.asarray(registered.rotation).T @ R_cabin_cam
+    assert np.degrees(np.arccos(np.clip((np.trace(dR) - 1) / 2, -1, 1))) < 1.0

@@ -44,7 +44,7 @@ def test_weighted_mistakes_normalised_by_active_weights(space):
     features = verdict.details["features"]
     assert features["seat_belt"]["status"] == "wrong" and features["tshirt_colour"]["status"] == "missing"
     assert features["driver_gender"]["status"] == "invalid" and features["luggage"]["status"] == "correct"
-    assert verdict.details["counts"] == {"correct": 6, "wrong": 2, "missing": 1, "invalid": 1}
+    assert verdict.details["counts"] == {"correct": 6, "wrong": 2, "missing": 1, "invalid": 1, "occluded": 0}
 
 
 def test_thresholds(space):

@@ -44,6 +44,19 @@ def test_empty_folder_is_a_clear_error(tmp_path):
         list_images(tmp_path)
 
 
+def test_a_render_folder_counts_frames_only_not_the_contact_sheet_or_channel_images(tmp_path):
+    """`render --random N` writes a contact sheet (and, with --channels, seg/depth images) beside its frames."""
+    rng = np.random.default_rng(2)
+    for name in ("scene-0000.png", "scene-0001.png", "contact_sheet.png", "scene-0000.seg.png",
+                 "scene-0000.semantic.png", "scene-0000.depth.png"):
+        save(tmp_path / name, rng.integers(0, 256, (12, 16, 3), dtype=np.uint8))
+    (tmp_path / "scene-0000.label.json").write_text("{}")
+    image_set = resolve_set(str(tmp_path))
+    assert [p.name for p in image_set.paths] == ["scene-0000.png", "scene-0001.png"]
+    assert sorted(p.name for p in image_set.left_out) == sorted(["contact_sheet.png", "scene-0000.depth.png",
+                                                                  "scene-0000.semantic.png", "scene-0000.seg.png"])
+
+
 def test_resize_is_anti_aliased():
     # a one-pixel checkerboard must average to grey; an aliasing filter returns stripes
     checker = (np.indices((598, 598)).sum(axis=0) % 2 * 255.0)[..., None].repeat(3, axis=2)

@@ -123,3 +123,31 @@ def test_captions_vary_in_wording_but_not_in_content():
     captions = {describe(p, v) for v in range(40)}
     assert len(captions) > 3
     assert all("rear-facing child seat" in c and "black T-shirt" in c and "drink can" in c for c in captions)
+
+
+def test_reference_train_leaves_the_shipped_model_alone_unless_it_is_named(tmp_path, monkeypatch, capsys):
+    """The command with its defaults, the rendering and training replaced by recorders."""
+    from isu_validate import render
+    from isu_validate.cli import main
+    from isu_validate.reference import training
+    from isu_validate.reference.model import default_model_dir
+
+    written = []
+
+    class NoRenderer:
+        def close(self):
+            pass
+
+    def record(space, renderer, out, workdir, n, held_out, seed, preset):
+        written.append(Path(out))
+        return {"held_out": {"per_feature": {}}}
+
+    monkeypatch.setattr(render, "open_renderer", lambda **kw: NoRenderer())
+    monkeypatch.setattr(training, "train_reference", record)
+    shipped = default_model_dir().resolve()
+    assert main(["reference", "train", "--n", "10", "--held-out", "1", "--workdir", str(tmp_path / "w")]) == 0
+    assert written[-1].resolve() != shipped and written[-1] == tmp_path / "w" / "model"
+    assert f"--sut-option model_dir={tmp_path / 'w' / 'model'}" in capsys.readouterr().out
+    assert main(["reference", "train", "--n", "10", "--held-out", "1", "--workdir", str(tmp_path / "w"),
+                 "--out", str(shipped)]) == 0
+    assert written[-1].resolve() == shipped  # named: replaced on purpose (re-pin afterwards)

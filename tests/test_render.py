@@ -41,7 +41,7 @@ AFFECTS = {"driver_gender": "driver", "driver_height": "driver", "driver_weight"
            "phone_position": "phone", "seat_belt": "seat_belt", "child_seat": "child_seat", "child": "child",
            "child_seat_orientation": "child_seat", "luggage": "luggage", "luggage_orientation": "luggage",
            "luggage_position": "luggage", "phone": "phone", "cola_bottle": "cola_bottle", "can": "can"}
-REGION = {"driver_emotion": "driver", "tshirt_colour": "driver", "luggage_colour": "luggage"}
+REGION = {"driver_emotion": "driver_face", "tshirt_colour": "driver", "luggage_colour": "luggage"}
 
 
 @pytest.fixture(scope="module")

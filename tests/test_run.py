@@ -13,11 +13,14 @@ from pathlib import Path
 
 import pytest
 
+from isu_validate import pipeline as pipeline_module
 from isu_validate.archive import Archive
 from isu_validate.archive.export import write_csv
 from isu_validate.cli import main
 from isu_validate.pipeline import PipelineConfig
 from isu_validate.search import RunConfig, RunError, run_search
+
+from tests import doubles
 
 ROOT = Path(__file__).resolve().parent.parent
 FACTORY = "tests.doubles:build"
@@ -117,8 +120,18 @@ def test_process_pool_and_dask_give_the_same_run_as_one_process(tmp_path):
 
     serial = run_search(config(tmp_path / "serial", budget_tests=12))
     pooled = run_search(config(tmp_path / "pool", budget_tests=12, workers=2))
+    closed_before = len(doubles.CLOSED)
     with LocalCluster(n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None) as cluster:
         dasked = run_search(config(tmp_path / "dask", budget_tests=12, cluster=cluster.scheduler_address))
+        # the worker (in this process) keeps no pipeline, and no renderer, of the finished run
+        assert not [key for key in pipeline_module._PIPELINES if str(tmp_path / "dask") in key]
+        assert len(doubles.CLOSED) > closed_before
+        # a setting only the pipeline can check is checked on a worker, before anything is written
+        bad = RunConfig(pipeline=PipelineConfig(run_dir=str(tmp_path / "bad"), factory="tests.doubles:nothing"),
+                        cluster=cluster.scheduler_address)
+        with pytest.raises(ValueError, match="cannot load the pipeline factory"):
+            run_search(bad)
+        assert not (tmp_path / "bad").exists()
     keys = [{t: r.scene_key for t, r in records_of(tmp_path / name).items()} for name in ("serial", "pool", "dask")]
     assert keys[0] == keys[1] == keys[2]
     assert serial.population == pooled.population == dasked.population
@@ -170,3 +183,128 @@ def test_an_unusable_sut_stops_the_run_with_a_clear_error(tmp_path, capsys):
     assert main(["run", "--out", str(tmp_path / "r"), "--sut", "command:/no/such/program", "--budget", "2",
                  "--pop-size", "2", "--no-report"]) == 2
     assert "not found" in capsys.readouterr().err
+
+
+# ------------------------------------------------------------------ broken setups stop at once
+def _run_cli(run_dir, *extra, budget="12", factory=FACTORY):
+    return main(["run", "--out", str(run_dir), "--pipeline-factory", factory, "--budget", budget, "--pop-size", "6",
+                 "--seed", "5", "--no-report", *extra])
+
+
+def _script(tmp_path, body: str) -> str:
+    path = tmp_path / "isu.py"
+    path.write_text(body)
+    return f"command:{sys.executable} {path}"
+
+
+ANSWER_FIRST_OPTION = ("import json, sys\nmsg = json.load(sys.stdin)\n"
+                       "print(json.dumps({'answers': {q['key']: q['options'][0] for q in msg['questions']}}))\n")
+
+
+@pytest.mark.parametrize("broken, error", [
+    ("import sys\nprint('CUDA out of memory', file=sys.stderr)\nsys.exit(3)\n", "exited with status 3"),
+    ("print('Segmentation fault (core dumped)')\n", "unparseable"),
+])
+def test_a_broken_sut_stops_the_run_with_its_last_error_and_resume_continues_after_the_fix(
+        tmp_path, capsys, broken, error):
+    sut = _script(tmp_path, broken)
+    assert _run_cli(tmp_path / "r", "--sut", sut, "--stop-after-sut-errors", "4") == 1
+    err = capsys.readouterr().err
+    assert "4 times in a row" in err and f"last SUT error: {error}" in err and "--resume" in err
+    if "status 3" in error:
+        assert "CUDA out of memory" in err  # the reason is on the console, not only in the CSV
+    kept = records_of(tmp_path / "r")
+    assert len(kept) == 4 and all(r.sut_error for r in kept.values())
+
+    (tmp_path / "isu.py").write_text(ANSWER_FIRST_OPTION)  # the fix
+    assert _run_cli(tmp_path / "r", "--resume") == 0
+    after = records_of(tmp_path / "r")
+    assert len(after) == 12 and sum(bool(r.sut_error) for r in after.values()) == 4
+    assert all(after[t].created == r.created for t, r in kept.items())  # kept, not evaluated again
+
+
+@pytest.mark.parametrize("workers", ["1", "2"])
+def test_a_closed_port_stops_the_run(tmp_path, capsys, workers):
+    import socket
+
+    with socket.socket() as s:  # a port that was free a moment ago: nothing listens there
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    assert _run_cli(tmp_path / "r", "--sut", f"http:http://127.0.0.1:{port}/isu", "--sut-option", "max_retries=0",
+                    "--stop-after-sut-errors", "3", "--workers", workers) == 1
+    assert "last SUT error: cannot reach" in capsys.readouterr().err
+    kept = len(records_of(tmp_path / "r"))
+    # one process stops right at the third; a pool also keeps what was already running
+    assert kept == 3 if workers == "1" else 3 <= kept <= 6
+
+
+def test_sut_errors_between_answers_do_not_stop_the_run(tmp_path, monkeypatch):
+    monkeypatch.setenv("ISU_TEST_SUT_ERROR_WITH_BOTTLE", "1")
+    summary = run_search(config(tmp_path / "run", budget_tests=18, stop_after_sut_errors=2))
+    assert summary.tests == 18 and summary.last_sut_error and 0 < summary.errors < 18
+
+
+@pytest.mark.parametrize("flags, message", [
+    (["--preset", "ultra"], "unknown render preset 'ultra'"),
+    (["--camera", "nope"], "nope"),
+    (["--cabin", "nope"], "nope"),
+    (["--space", "nope"], "no spaces rig named 'nope'"),
+    (["--threshold", "7"], "threshold must lie in 0..1"),
+    (["--channels", "seg,xray"], "unknown render channel(s) xray"),
+    (["--repeats", "0"], "repeats must be at least 1"),
+    (["--sut-timeout", "0"], "timeout must be positive"),
+    (["--pop-size", "1"], "population size must be at least 2"),
+    (["--budget", "0"], "--budget must be at least 1"),
+    (["--stop-after-sut-errors", "-1"], "0 (never stop) or more"),
+    (["--sut", "command:/no/such/isu"], "not found"),
+    (["--sut", "telepathy:x"], "unknown SUT spec"),
+    (["--sut", "openai:gpt-4o@https://api.openai.com/v1"], "no API key; set the environment variable OPENAI_API_KEY"),
+    (["--sut-option", "colour=blue"], "unknown option(s) colour"),
+])
+def test_every_setting_is_checked_before_the_first_file_is_written(tmp_path, capsys, monkeypatch, flags, message):
+    """With the real pipeline (Blender is only started by a first render, which never comes)."""
+    monkeypatch.delenv("OPENAI_API_KEY", raising=False)
+    sut = ["--sut", _script(tmp_path, ANSWER_FIRST_OPTION)] if "--sut" not in flags else []
+    out = tmp_path / "r"
+    assert main(["run", "--out", str(out), "--budget", "4", "--pop-size", "2", "--no-report", *sut, *flags]) == 2
+    assert message in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_after_a_bad_flag_the_corrected_command_starts_the_run(tmp_path, capsys):
+    assert _run_cli(tmp_path / "r", "--threshold", "1.5", factory="isu_validate.pipeline:build_components") == 2
+    assert not (tmp_path / "r").exists()
+    assert _run_cli(tmp_path / "r", "--threshold", "0.5") == 0
+
+
+def test_resume_refuses_settings_that_differ_and_lists_them(tmp_path, capsys):
+    assert _run_cli(tmp_path / "r", budget="6") == 0
+    before = records_of(tmp_path / "r")
+    capsys.readouterr()
+    sut = _script(tmp_path, ANSWER_FIRST_OPTION)
+    assert _run_cli(tmp_path / "r", "--resume", "--seed", "99", "--sut", sut, "--threshold", "0.5") == 2
+    err = capsys.readouterr().err
+    assert "--seed: 5 in the stored run, 99 now" in err
+    assert f"--sut: 'reference' in the stored run, '{sut}' now" in err
+    assert "--threshold: (default) in the stored run, 0.5 now" in err
+    assert _run_cli(tmp_path / "r", "--resume", budget="3") == 2
+    assert "may only grow" in capsys.readouterr().err
+    assert {t: r.created for t, r in records_of(tmp_path / "r").items()} == {t: r.created for t, r in before.items()}
+    # the same values typed again, a larger budget, and what only spreads the work: accepted
+    assert _run_cli(tmp_path / "r", "--resume", "--seed", "5", "--stop-after-sut-errors", "0") == 0
+    assert len(records_of(tmp_path / "r")) == 12
+
+
+def test_unreachable_cluster_is_one_clear_line_and_leaves_no_run_folder(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr("isu_validate.execution.DASK_CONNECT_TIMEOUT_S", 1)
+    assert _run_cli(tmp_path / "r", "--cluster", "tcp://127.0.0.1:9") == 2
+    assert "cannot reach the Dask scheduler at tcp://127.0.0.1:9" in capsys.readouterr().err
+    assert not (tmp_path / "r").exists()
+
+
+def test_run_help_says_where_api_keys_come_from(capsys):
+    with pytest.raises(SystemExit):
+        main(["run", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "API keys come from the environment only" in text and "never written to run.json" in text
+    assert "$OPENAI_API_KEY" in text and "--sut-option api_key_env=NAME" in text

@@ -94,7 +94,8 @@ def test_encoding_marks_inactive_features_and_one_hot_categories():
     start = dict((name, column) for name, column, *_ in encoder._plan)["luggage_position"]
     assert rows[1, start] == -1.0 and rows[0, start] in (0.0, 1.0)
     phone = dict((name, column) for name, column, *_ in encoder._plan)["phone_position"]
-    assert rows[0, phone:phone + 11].sum() == 1.0  # eleven phone positions, one hot
+    positions = len(SPACE.features["phone_position"].values)
+    assert rows[0, phone:phone + positions].sum() == 1.0  # one column per phone position, one hot
     assert "driver_height" in names
 
 

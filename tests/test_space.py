@@ -135,3 +135,18 @@ def test_repair_turns_any_vector_into_a_valid_scene(seed, u):
     raw["phone_position"], raw["phone"] = "P4", "NO"  # break a constraint on purpose
     repaired = SPACE.repair(raw, np.random.default_rng(seed))
     assert SPACE.violations(repaired) == []
+
+
+def test_a_scene_file_holding_a_list_is_a_clear_error_not_a_traceback(tmp_path, capsys):
+    import json
+
+    from isu_validate.cli import main
+
+    scenes = SPACE.sample(np.random.default_rng(0), 2)
+    with pytest.raises(SpaceError, match="a scene is a JSON object .* not a list; write one scene per file"):
+        SPACE.check(scenes)
+    path = tmp_path / "scenes.json"
+    path.write_text(json.dumps(scenes))
+    assert main(["render", str(path), "--out", str(tmp_path / "x.png"), "--preset", "draft"]) == 2
+    assert "not a list; write one scene per file" in capsys.readouterr().err
+    assert not (tmp_path / "x.png").exists()

@@ -132,3 +132,21 @@ def test_train_then_stylise_with_the_fast_model(pairs, tmp_path, capsys):
     assert main(["stylize", str(pairs / "s1" / "sim.png"), "--method", "fast", "--model", str(model),
                  "--style", str(pairs / "s1" / "sim.png"), "--out", str(out)]) == 2
     assert "trained for style" in capsys.readouterr().err
+
+
+def test_stylize_skips_a_corrupt_image_with_a_message_and_keeps_the_others(tmp_path, capsys):
+    renders = tmp_path / "renders"
+    renders.mkdir()
+    for name, colour in (("a", (200, 40, 40)), ("c", (40, 40, 200))):
+        img = Image.new("RGB", (40, 32), colour)
+        ImageDraw.Draw(img).rectangle([8, 8, 30, 24], fill=(240, 240, 240))
+        img.save(renders / f"{name}.png")
+    (renders / "b.png").write_bytes(b"\x89PNG\r\n\x1a\n" + b"not really a png")  # e.g. an interrupted copy
+    out = tmp_path / "nst"
+    assert main(["stylize", "--style", str(renders / "a.png"), str(renders), "--size", "32", "--steps", "1",
+                 "--out", str(out), "--threads", "2"]) == 0
+    err = capsys.readouterr().err
+    assert f"skipped {renders / 'b.png'}: cannot read it as an image" in err
+    assert sorted(p.name for p in out.glob("*.png")) == ["a.png", "c.png"]
+    report = json.loads((out / "stylize.json").read_text())
+    assert report["count"] == 2 and [s["source"] for s in report["skipped"]] == [str(renders / "b.png")]

@@ -104,6 +104,41 @@ def test_command_failures_are_sut_errors(space, program, image, monkeypatch, beh
         assert "model weights not found" in response.error
 
 
+def _running(pid: int) -> bool:
+    """Alive and not a zombie (an orphan's zombie may wait for a reaper that a container lacks)."""
+    try:
+        state = open(f"/proc/{pid}/stat").read().rsplit(")", 1)[1].split()[0]
+    except (FileNotFoundError, ProcessLookupError):
+        return False
+    return state != "Z"
+
+
+def test_a_timeout_kills_the_whole_process_group(space, image, tmp_path):
+    """A shell-script SUT that starts a child and hangs: after the timeout neither may live on."""
+    import os
+    import signal
+    import time
+
+    pids = tmp_path / "pids"
+    script = tmp_path / "slow_isu.sh"
+    script.write_text(f"#!/bin/sh\nsleep 300 &\necho $! >> {pids}\necho $$ >> {pids}\nwait\n")
+    script.chmod(0o755)
+    try:
+        response = open_sut(f"command:{script}", space=space, timeout_s=1.0).query(
+            build_request(space, SCENE, image, "vqa"))
+        assert "timed out after 1 s" in response.error
+        started = [int(p) for p in pids.read_text().split()]
+        assert len(started) == 2
+        deadline = time.monotonic() + 5  # SIGKILL is delivered asynchronously
+        while [pid for pid in started if _running(pid)] and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert not [pid for pid in started if _running(pid)], "the SUT's children outlived its timeout"
+    finally:  # never leave a sleeping orphan behind, even when the test fails
+        for pid in (int(p) for p in pids.read_text().split()) if pids.exists() else ():
+            if _running(pid):
+                os.kill(pid, signal.SIGKILL)
+
+
 def test_missing_program_fails_at_open(space):
     with pytest.raises(ValueError, match="not found"):
         open_sut("command:/no/such/isu-program --fast", space=space)
@@ -166,3 +201,8 @@ def test_sut_check_reports_errors_and_bad_input(program, image, capsys, monkeypa
     assert main(["sut", "check", "--sut", "reference", "--sut-option", f"model_dir={empty}", str(image)]) == 2
     assert "no trained reference ISU" in capsys.readouterr().err
     assert main(["sut", "check", "--sut", program, str(image.parent / "nope.png")]) == 2
+    assert "nope.png does not exist" in capsys.readouterr().err
+    assert main(["sut", "check", "--sut", program, str(image.parent)]) == 2
+    err = capsys.readouterr().err
+    assert f"{image.parent} is a folder; sut check asks about one image" in err and "does not exist" not in err
+    assert f"e.g. {image}" in err

@@ -5,6 +5,8 @@
 - ``v4l2:/dev/video0`` or ``v4l2:0``, optionally ``@1280x720``
 - ``depthai`` (the first OAK device) or ``depthai:MXID``, optionally ``@1920x1080``
 - ``replay:DIR`` (a session recorded by ``capture shoot``) or ``replay:VIDEO.mp4``
+- ``standin[:RIG]``: not a camera; with ``--pair``, the pair's scene rendered through another
+  rig, light and noise (marked as a stand-in in every sidecar)
 """
 from __future__ import annotations
 
@@ -16,12 +18,12 @@ from .base import (CaptureError, DeviceBusy, DeviceDisconnected, DeviceNotFound,
 __all__ = ["CaptureError", "DeviceBusy", "DeviceDisconnected", "DeviceNotFound", "ExposureRequest", "Frame",
            "FrameSource", "PermissionDenied", "open_source", "parse_spec"]
 
-SPEC_HELP = "v4l2:/dev/videoN[@WxH], depthai[:MXID][@WxH] or replay:DIR|VIDEO"
+SPEC_HELP = "v4l2:/dev/videoN[@WxH], depthai[:MXID][@WxH], replay:DIR|VIDEO or standin[:RIG] (with --pair)"
 
 
 def parse_spec(spec: str) -> tuple[str, str, tuple[int, int] | None]:
     """(kind, target, size) of a source spec."""
-    m = re.fullmatch(r"(v4l2|depthai|replay)(?::(.+?))?(?:@(\d+)x(\d+))?", spec.strip())
+    m = re.fullmatch(r"(v4l2|depthai|replay|standin)(?::(.+?))?(?:@(\d+)x(\d+))?", spec.strip())
     if not m:
         raise ValueError(f"cannot read source {spec!r}; use {SPEC_HELP}")
     kind, target = m[1], m[2] or ""
@@ -31,8 +33,12 @@ def parse_spec(spec: str) -> tuple[str, str, tuple[int, int] | None]:
     return kind, target, size
 
 
-def open_source(spec: str) -> FrameSource:
+def open_source(spec: str, scene: dict | None = None, space=None) -> FrameSource:
+    """``scene`` and ``space``: what a stand-in renders (a pair's scene); cameras ignore them."""
     kind, target, size = parse_spec(spec)
+    if kind == "standin":
+        from .standin import StandInSource
+        return StandInSource(target, scene, space)
     if kind == "v4l2":
         from .v4l2 import V4L2Source
         return V4L2Source(target, size)

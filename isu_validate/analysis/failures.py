@@ -1,5 +1,6 @@
 """Failure analysis per feature: how often each question is answered wrong and in which
-direction (FRONT_FACING answered as REAR_FACING), and the failure rate per feature value."""
+direction (FRONT_FACING answered as REAR_FACING), and the failure rate per feature value.
+A feature the frame hid (``occluded``) was not judged: it is counted apart, never as wrong."""
 from __future__ import annotations
 
 from collections import Counter
@@ -17,9 +18,10 @@ def wrong_answers(run: Run, record: TestRecord) -> dict[str, tuple[str, str]]:
     """feature -> (truth, answer) for every question this test got wrong (VQA only)."""
     if record.errored or record.answers is None:
         return {}
-    answers = record.answers
+    answers, hidden = record.answers, set(record.occluded)
     return {key: (truth, str(answers.get(key, NO_ANSWER)))
-            for key, truth in run.truth(record).items() if str(answers.get(key, NO_ANSWER)) != truth}
+            for key, truth in run.truth(record).items()
+            if key not in hidden and str(answers.get(key, NO_ANSWER)) != truth}
 
 
 def _answered(runs: Iterable[Run]):
@@ -30,19 +32,22 @@ def _answered(runs: Iterable[Run]):
 
 
 def feature_errors(runs: Iterable[Run]) -> tuple[list[dict], list[dict]]:
-    """(per-feature rows, confusion rows): asked, wrong, rate, most frequent wrong direction."""
-    asked, wrong, confusion = Counter(), Counter(), Counter()
+    """(per-feature rows, confusion rows): asked (and judged), occluded (asked, not judged), wrong,
+    wrong rate among the judged, most frequent wrong direction."""
+    asked, hidden, wrong, confusion = Counter(), Counter(), Counter(), Counter()
     for run, record in _answered(runs):
         truth = run.truth(record)
-        asked.update(truth.keys())
+        occluded = set(record.occluded) & set(truth)
+        hidden.update(occluded)
+        asked.update(set(truth) - occluded)
         for key, (right, answer) in wrong_answers(run, record).items():
             wrong[key] += 1
             confusion[(key, right, answer)] += 1
     rows = []
-    for key in sorted(asked, key=lambda k: (-wrong[k] / asked[k], k)):
+    for key in sorted(set(asked) | set(hidden), key=lambda k: (-wrong[k] / max(asked[k], 1), k)):
         top = max(((c, t, a) for (f, t, a), c in confusion.items() if f == key), default=None)
-        rows.append({"feature": key, "asked": asked[key], "wrong": wrong[key],
-                     "wrong_rate": round(wrong[key] / asked[key], 4),
+        rows.append({"feature": key, "asked": asked[key], "occluded": hidden[key], "wrong": wrong[key],
+                     "wrong_rate": round(wrong[key] / asked[key], 4) if asked[key] else float("nan"),
                      "most_common_error": f"{top[1]} answered as {top[2]} ({top[0]}x)" if top else ""})
     pairs = [{"feature": f, "truth": t, "answer": a, "count": c}
              for (f, t, a), c in sorted(confusion.items(), key=lambda kv: (-kv[1], kv[0]))]

@@ -115,7 +115,7 @@ def settings_section(meta: dict) -> str:
 def overview(runs: list[Run]) -> Part:
     rows = [run_rates(r) for r in runs]
     columns = ["run", "sut", "mode", "algorithm", "seed", "tests", "with_verdict", "failures", "sut_errors",
-               "render_errors"]
+               "render_errors", "occluded"]
     return Part(section("Runs", table(columns, rows), anchor="runs"), {"runs": rows})
 
 
@@ -124,17 +124,19 @@ def rq1_part(runs: list[Run]) -> Part:
     html = [paragraph("Failure rate (%) at each threshold: a VQA test fails when F_qa < t, a captioning test when "
                       "F_emb <= t (the runs' oracles). "
                       "Mean ± standard deviation over repeated runs; tests with SUT or render errors are counted "
-                      "apart and left out of the rates.")]
+                      "apart and left out of the rates. 'occluded' counts features the frames hid (not "
+                      "judged, left out of each test's fitness).")]
     for mode, rows in tables.items():
         thresholds = FAILURE_THRESHOLDS[mode]
         shown = [{"SUT": r["sut"], "algorithm": r["algorithm"], "runs": r["runs"],
                   "tests": mean_std(r["tests mean"], r["tests std"]),
                   "SUT errors": mean_std(r["sut_errors mean"], r["sut_errors std"]),
+                  "occluded": mean_std(r["occluded mean"], r["occluded std"]),
                   **{threshold_label(t): mean_std(r[f"{rate_key(t)} mean"], r[f"{rate_key(t)} std"])
                      for t in thresholds}}
                  for r in rows]
         html.append(f"<h3>{esc(mode.upper())}: failure rate (%) by threshold on {esc(METRIC_KEYS[mode])}</h3>")
-        columns = ["SUT", "algorithm", "runs", "tests", "SUT errors"] + [threshold_label(t) for t in thresholds]
+        columns = ["SUT", "algorithm", "runs", "tests", "SUT errors", "occluded"] + [threshold_label(t) for t in thresholds]
         html.append(table(columns, shown))
         for sut in sorted({r["sut"] for r in rows}):
             series = {r["algorithm"]: ([r[f"{rate_key(t)} mean"] for t in thresholds],
@@ -144,7 +146,8 @@ def rq1_part(runs: list[Run]) -> Part:
     stats = comparisons(runs)
     html.append("<h3>Between algorithms: Wilcoxon rank-sum test and Vargha-Delaney A12 on per-run failure rates</h3>")
     html.append(paragraph("A12 > 0.5: algorithm a tends to have the higher failure rate. Magnitude: negligible "
-                          "< 0.56 <= small < 0.64 <= medium < 0.71 <= large (on max(A12, 1 - A12))."))
+                          "< 0.56 <= small < 0.64 <= medium < 0.71 <= large (on max(A12, 1 - A12)); "
+                          "'sample too small' where so few runs cannot show any difference at p < 0.05."))
     shown = [dict(r, threshold=threshold_label(r["threshold"])) for r in stats]
     html.append(table(["sut", "mode", "threshold", "a", "b", "runs_a", "runs_b", "median_a", "median_b", "U", "p",
                        "method", "A12", "magnitude", "note"], shown) if stats

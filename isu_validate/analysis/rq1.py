@@ -23,7 +23,8 @@ def run_rates(run: Run) -> dict:
     values = [run.metric(r) for r in run.valid]
     row = {"run": run.name, "sut": run.sut, "mode": run.mode, "algorithm": run.algorithm, "seed": run.seed,
            "tests": len(run.records), "with_verdict": len(run.valid), "failures": len(run.failures),
-           "sut_errors": len(run.sut_errors), "render_errors": len(run.render_errors)}
+           "sut_errors": len(run.sut_errors), "render_errors": len(run.render_errors),
+           "occluded": sum(len(r.occluded) for r in run.valid)}   # features hidden, left out of the fitness
     for t in run.thresholds:
         failing = sum(fails_at(run.mode, v, t) for v in values)
         row[rate_key(t)] = 100.0 * failing / len(values) if values else math.nan
@@ -52,7 +53,7 @@ def rq1_table(runs: list[Run]) -> dict[str, list[dict]]:
         per_run = [run_rates(r) for r in members]
         row = {"sut": sut, "algorithm": algorithm, "runs": len(members)}
         rates = [rate_key(t) for t in members[0].thresholds]
-        for column in ["tests", "failures", "sut_errors", "render_errors"] + rates:
+        for column in ["tests", "failures", "sut_errors", "render_errors", "occluded"] + rates:
             row[f"{column} mean"], row[f"{column} std"] = _mean_std([r[column] for r in per_run])
         tables[mode].append(row)
     return dict(tables)

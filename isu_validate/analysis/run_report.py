@@ -44,6 +44,7 @@ def summary(run: Run) -> str:
                      stat("failure rate (%)", rate),
                      stat("SUT errors", row["sut_errors"], "warn" if row["sut_errors"] else ""),
                      stat("render errors", row["render_errors"], "warn" if row["render_errors"] else ""),
+                     stat("occluded features (not judged)", row["occluded"]),
                      stat("wall time (s)", wall)])
     config = {k: v for k, v in run.config.items() if k != "pipeline"}
     settings = [{"setting": k, "value": v} for k, v in {**config, **run.pipeline}.items()]

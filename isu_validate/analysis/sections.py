@@ -30,8 +30,10 @@ def feature_analysis(runs: list[Run], title: str = "Failure analysis per feature
     parts = []
     if rows:
         parts.append(paragraph("How often each question was answered wrong (tests with a verdict), "
-                               "and in which direction."))
-        parts.append(table(["feature", "asked", "wrong", "wrong_rate", "most_common_error"], rows))
+                               "and in which direction. 'occluded' counts the times the frame hid the "
+                               "feature: those answers were not judged, and 'asked' and the rates leave "
+                               "them out."))
+        parts.append(table(["feature", "asked", "occluded", "wrong", "wrong_rate", "most_common_error"], rows))
         if any(r["wrong"] for r in rows):
             shown = [r for r in rows if r["wrong"]]
             chart = plots.horizontal_bars([r["feature"] for r in shown], [r["wrong_rate"] for r in shown],

@@ -7,6 +7,11 @@ by dynamic programming over mid-ranks, so ties are handled exactly too (SciPy's 
 method refuses ties and falls back to a normal approximation that is poor for tiny
 samples).  Larger samples use the normal approximation with tie and continuity
 correction, as SciPy does.
+
+Too few runs: with n1 and n2 runs the exact test's smallest possible two-sided p-value
+is 2 / C(n1 + n2, n1) (1.0 for one run per algorithm, 0.1 for three).  When even that
+exceeds ``ALPHA``, no difference can be shown, so A12's magnitude reads "sample too
+small" instead of a label ("large" for A12 = 0 from one run each) that would be noise.
 """
 from __future__ import annotations
 
@@ -18,6 +23,8 @@ from scipy.special import ndtr
 from scipy.stats import rankdata
 
 EXACT_LIMIT = 60  # pooled sample size up to which the p-value is computed exactly
+ALPHA = 0.05      # the significance level the "sample too small" judgement refers to
+TOO_SMALL = "sample too small"
 
 # Vargha and Delaney (2000): thresholds on max(A, 1 - A)
 A12_MAGNITUDES = ((0.56, "negligible"), (0.64, "small"), (0.71, "medium"))
@@ -48,9 +55,22 @@ def rank_sum_test(x, y, exact_limit: int = EXACT_LIMIT) -> RankSumResult:
     u = float(ranks[:n1].sum() - n1 * (n1 + 1) / 2)
     if np.all(ranks == ranks[0]):
         return RankSumResult(n1, n2, u, 1.0, "exact", "all values tied")
+    note = too_small_note(n1, n2)
     if n1 + n2 <= exact_limit:
-        return RankSumResult(n1, n2, u, _exact_p(ranks, n1), "exact")
+        return RankSumResult(n1, n2, u, _exact_p(ranks, n1), "exact", note)
     return RankSumResult(n1, n2, u, _asymptotic_p(u, ranks, n1, n2), "asymptotic")
+
+
+def smallest_p(n1: int, n2: int) -> float:
+    """The smallest two-sided p-value the exact rank-sum test can give for these group sizes."""
+    return min(1.0, 2.0 / math.comb(n1 + n2, n1)) if n1 and n2 else math.nan
+
+
+def too_small_note(n1: int, n2: int) -> str:
+    if not smallest_p(n1, n2) > ALPHA:
+        return ""
+    return (f"{TOO_SMALL}: with {n1} and {n2} runs no difference can reach p < {ALPHA:g} "
+            f"(smallest possible p {smallest_p(n1, n2):.2g}); run more seeds")
 
 
 def _clean(values) -> np.ndarray:
@@ -86,7 +106,7 @@ def _asymptotic_p(u: float, ranks: np.ndarray, n1: int, n2: int) -> float:
 @dataclass(frozen=True)
 class EffectSize:
     a12: float        # P(X > Y) + 0.5 P(X = Y); NaN when a group is empty
-    magnitude: str    # negligible | small | medium | large | undefined
+    magnitude: str    # negligible | small | medium | large | undefined | sample too small
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -100,6 +120,8 @@ def vargha_delaney(x, y) -> EffectSize:
     greater = (x[:, None] > y[None, :]).sum()
     equal = (x[:, None] == y[None, :]).sum()
     a12 = float((greater + 0.5 * equal) / (len(x) * len(y)))
+    if smallest_p(len(x), len(y)) > ALPHA:
+        return EffectSize(a12, TOO_SMALL)
     return EffectSize(a12, a12_magnitude(a12))
 
 

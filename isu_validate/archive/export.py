@@ -1,4 +1,8 @@
-"""The tests table of a run as CSV (ARCHITECTURE.md contract), one row per evaluated test."""
+"""The tests table of a run as CSV (a contract, docs/ARCHITECTURE.md), one row per evaluated test.
+
+Beyond the contract: ``visible.<feature>`` is the visible share of each feature that names render
+parts (empty where the scene has nothing of it to see), and ``occluded`` lists the features the frame
+showed too little of to be judged (left out of the fitness), separated by ``;``."""
 from __future__ import annotations
 
 import csv
@@ -9,13 +13,15 @@ from typing import IO
 from .store import Archive, TestRecord
 
 BASE_COLUMNS = ["test_id", "algorithm", "seed", "generation"]
-TAIL_COLUMNS = ["f_div", "failed", "sut_error", "render_error", "render_s", "sut_s", "image"]
+TAIL_COLUMNS = ["f_div", "failed", "occluded", "sut_error", "render_error", "render_s", "sut_s", "image"]
 
 
-def _feature_names(run_dir: Path) -> tuple[list[str], list[str]]:
-    """All features, and the predicted ones (the SUT's answers exist only for those)."""
+def _feature_names(run_dir: Path) -> tuple[list[str], list[str], list[str]]:
+    """All features, the predicted ones (the SUT's answers exist only for those), and those with a
+    visibility (predicted features that name the render parts showing them)."""
     features = json.loads((run_dir / "run.json").read_text())["space"]["features"]
-    return list(features), [n for n, f in features.items() if f.get("predicted")]
+    predicted = [n for n, f in features.items() if f.get("predicted")]
+    return list(features), predicted, [n for n in predicted if features[n].get("visible_parts")]
 
 
 def rows(run_dir: Path) -> tuple[list[str], list[dict]]:
@@ -23,7 +29,7 @@ def rows(run_dir: Path) -> tuple[list[str], list[dict]]:
     archive_path = run_dir / "archive.sqlite"
     if not archive_path.exists():
         raise FileNotFoundError(f"{run_dir} is not a run directory (no archive.sqlite); give the folder `run --out` wrote")
-    features, predicted = _feature_names(run_dir)
+    features, predicted, seen = _feature_names(run_dir)
     archive = Archive(archive_path)
     try:
         records = list(archive)
@@ -31,11 +37,12 @@ def rows(run_dir: Path) -> tuple[list[str], list[dict]]:
         archive.close()
     fitness_keys = sorted({k for r in records for k in r.fitness})
     columns = (BASE_COLUMNS + [f"x.{f}" for f in features] + [f"y.{f}" for f in predicted]
-               + fitness_keys + TAIL_COLUMNS)
-    return columns, [_row(r, features, predicted, fitness_keys) for r in records]
+               + [f"visible.{f}" for f in seen] + fitness_keys + TAIL_COLUMNS)
+    return columns, [_row(r, features, predicted, seen, fitness_keys) for r in records]
 
 
-def _row(record: TestRecord, features: list[str], predicted: list[str], fitness_keys: list[str]) -> dict:
+def _row(record: TestRecord, features: list[str], predicted: list[str], seen: list[str],
+         fitness_keys: list[str]) -> dict:
     row = {"test_id": record.test_id, "algorithm": record.algorithm, "seed": record.seed,
            "generation": record.generation}
     answers = record.answers or {}
@@ -43,9 +50,13 @@ def _row(record: TestRecord, features: list[str], predicted: list[str], fitness_
         row[f"x.{f}"] = record.canonical.get(f, "")
     for f in predicted:
         row[f"y.{f}"] = answers.get(f, "")
+    visibility = record.visibility
+    for f in seen:
+        row[f"visible.{f}"] = visibility.get(f, "")
     for k in fitness_keys:
         row[k] = record.fitness.get(k, "")
-    row.update(f_div=round(record.f_div, 6), failed=int(record.failed), sut_error=record.sut_error or "",
+    row.update(f_div=round(record.f_div, 6), failed=int(record.failed), occluded=";".join(record.occluded),
+               sut_error=record.sut_error or "",
                render_error=record.render_error or "", render_s=record.render_s or "", sut_s=record.sut_s or "",
                image=record.image or "")
     return row

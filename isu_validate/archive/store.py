@@ -48,6 +48,16 @@ class TestRecord:
     def errored(self) -> bool:
         return bool(self.sut_error or self.render_error)
 
+    @property
+    def occluded(self) -> list[str]:
+        """Features the frame showed too little of to be judged (left out of the fitness)."""
+        return list(self.details.get("occluded", []))
+
+    @property
+    def visibility(self) -> dict[str, float]:
+        """Visible share of each feature that shows something (see isu_validate/render/visibility.py)."""
+        return dict(self.details.get("visibility", {}))
+
 
 _JSON_FIELDS = ("scene", "canonical", "answers", "fitness", "timings", "details")
 _COLUMNS = [f for f in TestRecord.__dataclass_fields__]

@@ -15,6 +15,7 @@ BENCH_MODULES = [
     "isu_validate.evaluate.bench",
     "isu_validate.realism.bench",  # bench fid
     "style_transfer.bench",        # bench nst
+    "capture.camera_model.bench",  # bench exposure
 ]
 
 

@@ -35,7 +35,8 @@ def register(sub) -> None:
     p.add_argument("--outlier-sigma", type=float, default=4.0, help="reject corners beyond this many sigmas")
     p.add_argument("--no-cross-validation", action="store_true")
     p.add_argument("--extrinsics-from", metavar="RIG", help="copy the cabin pose from this camera rig")
-    p.add_argument("--markers", help="marker table (TOML) for 'register', or with --register-image")
+    p.add_argument("--markers", help="marker table (TOML file, or a shipped name such as 'example') for 'register', "
+                                     "or with --register-image; see rigs/markers/example.toml")
     p.add_argument("--register-image", help="image with cabin markers: register the pose right away")
     p.add_argument("--no-fit", action="store_true", help="diff: do not fit the implied transform between the frames")
     p.add_argument("--distance", type=float, default=1.0,
@@ -79,6 +80,10 @@ def _calibrate(args) -> int:
 
     detections, skipped = detect_images(paths, spec, progress)
     print(file=sys.stderr)
+    for path, why in skipped:  # the user must see which shots did not count, not only the camera file
+        print(f"skipped {path}: {why}", file=sys.stderr)
+    if skipped:
+        print(f"used {len(detections)} of {len(paths)} images", file=sys.stderr)
     name = args.name or Path(args.out).stem
     res = calibrate(detections, args.model, board=spec, name=name, working_distance_m=args.working_distance,
                     skipped=skipped, cross_validate=not args.no_cross_validation, outlier_sigma=args.outlier_sigma)
@@ -132,8 +137,11 @@ def _registered(cam, image_path, markers_path):
     import cv2
 
     from capture.registration import load_markers, register
+    from isu_validate.paths import resolve_rig
     if not markers_path:
-        raise ValueError("registration needs --markers FILE (marker ids and cabin corners, see capture/registration.py)")
+        raise ValueError("registration needs --markers FILE (marker ids and their corners in the cabin; "
+                         "start from the shipped example rigs/markers/example.toml)")
+    markers_path = resolve_rig("markers", markers_path)  # a file, or the name of a shipped one
     img = cv2.imread(str(image_path), cv2.IMREAD_GRAYSCALE)
     if img is None:
         raise FileNotFoundError(f"cannot read registration image {image_path}")
@@ -153,7 +161,7 @@ def _register(args) -> int:
         print(camera_file.to_json(cam))
     else:
         reg = cam.registration
-        print(f"camera at {[round(v, 4) for v in cam.position]} m in the cabin; markers {reg['markers']}, "
+        print(f"camera at {[round(float(v), 4) for v in cam.position]} m in the cabin; markers {reg['markers']}, "
               f"reprojection RMS {reg['rms_px']:.3f} px; wrote {out}")
         if "warning" in reg:
             print(f"warning: {reg['warning']}", file=sys.stderr)

@@ -2,13 +2,16 @@
 
     isu-validate capture list [--json]
     isu-validate capture shoot --source SPEC --frames N --out DIR [--exposure-us U --iso I | --auto-exposure]
+    isu-validate capture shoot --source SPEC --pair PAIRS/<sample>   (frames into real/, with the alignment aid)
+    isu-validate capture align --source SPEC --pair PAIRS/<sample>   (live: the aid only, nothing stored)
 """
 from __future__ import annotations
 
 import json
 import sys
 
-SOURCE_HELP = "v4l2:/dev/videoN[@WxH], depthai[:MXID][@WxH], or replay:DIR|VIDEO (a recorded session)"
+SOURCE_HELP = ("v4l2:/dev/videoN[@WxH], depthai[:MXID][@WxH], replay:DIR|VIDEO (a recorded session), or "
+               "standin[:RIG] (no camera: the pair's scene rendered another way, marked as a stand-in)")
 
 
 def register(sub) -> None:
@@ -20,23 +23,29 @@ def register(sub) -> None:
     sp = csub.add_parser("shoot", help="take frames as PNG with a JSON sidecar each")
     sp.add_argument("--source", required=True, help=SOURCE_HELP)
     sp.add_argument("--frames", type=int, default=1)
-    sp.add_argument("--out", required=True, help="session folder (replay it later with --source replay:DIR)")
+    sp.add_argument("--out", help="session folder (replay it later with --source replay:DIR)")
+    sp.add_argument("--pair", help="a sample of a pairs directory (PAIRS/<sample>): frames go to its real/, "
+                                   "each aligned against its sim.png (images in align/, scores printed)")
     sp.add_argument("--exposure-us", type=int, help="manual exposure time, microseconds")
     sp.add_argument("--iso", type=int, help="manual ISO (DepthAI) or raw gain (V4L2)")
     sp.add_argument("--auto-exposure", action="store_true")
     sp.add_argument("--json", action="store_true", help="print the session summary as JSON")
     sp.set_defaults(func=run_shoot)
+    ap = csub.add_parser("align", help="live alignment aid for a pair: frames compared with the render, not stored")
+    ap.add_argument("--source", required=True, help=SOURCE_HELP)
+    ap.add_argument("--pair", required=True, help="PAIRS/<sample>")
+    ap.add_argument("--frames", type=int, default=0, help="stop after N frames (default: until Ctrl-C)")
+    ap.set_defaults(func=run_align)
     p.set_defaults(func=lambda args: p.print_help() or 2)
 
 
 def run_list(args) -> int:
-    from capture.discovery import list_cameras, none_found_message
+    from capture.discovery import any_camera, list_cameras, none_found_message
     found = list_cameras()
     if args.json:
         print(json.dumps(found, indent=2))
-        return 0
-    entries = found["v4l2"] + found["depthai"] + found["usb"]
-    if not entries:
+        return 0 if any_camera(found) else 1
+    if not any_camera(found):
         print(none_found_message(found))
         return 1
     for e in found["v4l2"]:
@@ -53,16 +62,22 @@ def run_list(args) -> int:
 
 def run_shoot(args) -> int:
     from capture.session import shoot
-    from capture.sources import CaptureError, ExposureRequest, open_source
+    from capture.sources import CaptureError, ExposureRequest
     request = ExposureRequest(args.exposure_us, args.iso, args.auto_exposure)
-    source = open_source(args.source)
+    if (args.out is None) == (args.pair is None):
+        raise ValueError("give --out DIR (a session folder) or --pair PAIRS/<sample>, one of the two")
+    sample = _pair(args.pair) if args.pair else None
+    source = _source(args.source, sample)
+    out, first, annotate = (sample.real_dir, sample.next_frame_index(), _aligner(sample)) if sample else (
+        args.out, None, None)
 
     def progress(i, n, meta):
         exp = meta.get("exposure_us")
-        print(f"\rframe {i}/{n}" + (f" exposure {exp:.0f} us" if exp else ""), end="", file=sys.stderr)
+        end = "\n" if sample else ""
+        print(f"\rframe {i}/{n}" + (f" exposure {exp:.0f} us" if exp else ""), end=end, file=sys.stderr)
 
     try:
-        session = shoot(source, args.frames, args.out, request, progress)
+        session = shoot(source, args.frames, out, request, progress, first, annotate)
     except CaptureError as exc:
         print(file=sys.stderr)
         raise ValueError(str(exc)) from None  # the CLI prints ValueErrors as one clear line
@@ -74,4 +89,63 @@ def run_shoot(args) -> int:
                           "warnings": session.warnings}, indent=2))
     else:
         print(f"wrote {len(session.frames)} frame(s) with sidecars to {session.out}")
+    return 0
+
+
+def _pair(path):
+    from isu_validate.pairs import PairsDir
+    sample = PairsDir(__import__("pathlib").Path(path).parent).sample(path)
+    if not sample.sim.is_file():
+        raise ValueError(f"{sample.path} has no sim.png to align against; is it a sample written by "
+                         "`isu-validate recreate`?")
+    return sample
+
+
+def _source(spec: str, sample):
+    """The frame source; a stand-in renders the pair's scene in the pair's space."""
+    from capture.sources import open_source, parse_spec
+    if parse_spec(spec)[0] != "standin":
+        return open_source(spec)
+    if sample is None:
+        raise ValueError("the standin source renders a pair's scene: add --pair PAIRS/<sample>")
+    from isu_validate.space import load_space
+    return open_source(spec, scene=sample.scene(), space=load_space(sample.label().get("space", "isu-paper")))
+
+
+def _aligner(sample):
+    """Per frame: the alignment aid image in the pair's align/, the scores printed and kept in the sidecar."""
+    from capture.alignment import align, read_bgr
+    import cv2
+    render = read_bgr(sample.sim)
+
+    def annotate(path, frame) -> dict:
+        result, image = align(render, frame.image)
+        target = sample.align_image(path)
+        target.parent.mkdir(parents=True, exist_ok=True)
+        cv2.imwrite(str(target), image)
+        print(f"  {path.name}: {result.line()} (aid: {target})", file=sys.stderr)
+        return {"alignment": {**result.to_json(), "aid_image": str(target.relative_to(sample.path))}}
+    return annotate
+
+
+def run_align(args) -> int:
+    """Frames from the source against the pair's render until enough: the aid goes to align/live.png."""
+    from capture.alignment import align, read_bgr
+    from capture.sources import CaptureError
+    import cv2
+    sample = _pair(args.pair)
+    render = read_bgr(sample.sim)
+    live = sample.align_dir / "live.png"
+    live.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        with _source(args.source, sample) as source:
+            n = 0
+            while not args.frames or n < args.frames:
+                result, image = align(render, source.read().image)
+                cv2.imwrite(str(live), image)
+                n += 1
+                print(f"frame {n}: {result.line()}", flush=True)
+    except CaptureError as exc:
+        raise ValueError(str(exc)) from None
+    print(f"aid image: {live} (refreshed each frame)", file=sys.stderr)
     return 0

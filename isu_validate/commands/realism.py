@@ -87,6 +87,10 @@ def _run(args) -> int:
         for spec in (a, b):
             if spec not in feats:
                 image_set = resolve_set(spec)
+                if image_set.left_out:
+                    print(f"{spec}: left out {len(image_set.left_out)} render by-product(s) that are no frames: "
+                          f"{', '.join(p.name for p in image_set.left_out[:5])}"
+                          f"{' ...' if len(image_set.left_out) > 5 else ''}", file=sys.stderr)
                 feats[spec] = extractor.features(image_set.paths, stderr_progress(spec))
         result = compare_features(feats[a], feats[b], metric, asdict(extractor.settings))
         result.settings.update(set_a=a, set_b=b, feature_cache=str(cache) if cache else "off")

@@ -16,7 +16,9 @@ def register(sub) -> None:
     train.add_argument("--preset", default="draft", help="render preset (default draft, as the demo renders)")
     train.add_argument("--camera", default="default")
     train.add_argument("--cabin", default="default")
-    train.add_argument("--out", type=Path, help="model folder (default: the shipped data/reference-isu)")
+    train.add_argument("--out", type=Path,
+                       help="model folder (default WORKDIR/model; the shipped model is replaced only when "
+                            "named here: --out data/reference-isu)")
     train.add_argument("--workdir", type=Path, default=Path("runs/reference-training"),
                        help="where the rendered sets go; an interrupted training resumes from here")
     train.set_defaults(func=cmd_train)
@@ -32,7 +34,7 @@ def cmd_train(args) -> int:
     if args.n < 10 or args.held_out < 1:
         raise ValueError("use at least --n 10 training scenes and --held-out 1")
     space = load_space(args.space)
-    out = args.out or default_model_dir()
+    out = args.out or args.workdir / "model"  # never the shipped model unless asked for by name
     renderer = open_renderer(preset=args.preset, camera=args.camera, cabin=args.cabin,
                              cache_dir=args.workdir / "cache", log_dir=args.workdir / "logs")
     try:
@@ -41,4 +43,6 @@ def cmd_train(args) -> int:
         renderer.close()
     print(json.dumps(card["held_out"]["per_feature"], indent=2))
     print(f"model and card written to {out}")
+    if out.resolve() != default_model_dir().resolve():
+        print(f"use it with: isu-validate run --sut reference --sut-option model_dir={out}")
     return 0

@@ -17,7 +17,15 @@ def register(sub) -> None:
     p.add_argument("--random", type=int, metavar="N", help="render N random valid scenes instead of a file")
     p.add_argument("--seed", type=int, default=0, help="seed of the random scenes (default 0)")
     p.add_argument("--preset", default="standard", help="draft | standard | final (default standard)")
-    p.add_argument("--rig", default="default", help="camera rig name or .toml path (default: default)")
+    p.add_argument("--rig", "--camera", dest="rig", default="default",
+                   help="camera rig name or .toml path (default: default); a rig with an imaging model "
+                        "([exposure]/[response]/[noise]/[colour], see `isu-validate exposure`) develops the "
+                        "linear render the way that camera would")
+    p.add_argument("--extrinsics-from", metavar="RIG",
+                   help="take the camera's pose in the cabin from this registered rig (for a calibrated camera "
+                        "file whose pose was never registered)")
+    p.add_argument("--min-visible", action="append", default=[], metavar="SHARE|FEATURE=SHARE",
+                   help="visibility threshold for the label's `occluded` features (default: the space's)")
     p.add_argument("--cabin", default="default", help="cabin rig name or .toml path (default: default)")
     p.add_argument("--space", default="isu-paper", help="scene space name or .toml path (default isu-paper)")
     p.add_argument("--channels", default="", help="comma list of extra outputs: seg,depth,exr")
@@ -29,7 +37,9 @@ def register(sub) -> None:
 
 def run(args) -> int:
     from ..cli import UserError
+    from ..protocols import RenderError
     from ..render import open_renderer
+    from ..render.visibility import parse_min_visible
     from ..space import load_space
 
     if (args.scene is None) == (args.random is None):
@@ -48,20 +58,32 @@ def run(args) -> int:
         folder = args.out.parent
         targets = [(args.out, scene)]
     log_dir = args.log or folder / "logs"
+    unusable = 0
     with open_renderer(args.preset, args.rig, args.cabin, args.channels, args.cache, log_dir, args.timeout,
-                       space) as renderer:
+                       space, extrinsics_from=args.extrinsics_from,
+                       min_visible=parse_min_visible(args.min_visible)) as renderer:
         for k, (out, scene) in enumerate(targets, 1):
             if args.random is not None:
                 out.parent.mkdir(parents=True, exist_ok=True)
                 out.with_suffix(".scene.json").write_text(json.dumps(space.canonical(scene), indent=1))
-            result = renderer.render(scene, out)
+            try:
+                result = renderer.render(scene, out)
+            except RenderError as exc:   # reported, and the other scenes still render
+                unusable += 1
+                print(f"[{k}/{len(targets)}] {out}  render error: {exc}", file=sys.stderr)
+                continue
             t = result.timings
+            hidden = f"; occluded: {', '.join(result.occluded)}" if result.occluded else ""
             print(f"[{k}/{len(targets)}] {out}  update {t['update_s']:.3f}s render {t['render_s']:.2f}s "
-                  f"write {t['write_s']:.2f}s total {t['total_s']:.2f}s{' (cached)' if result.cached else ''}",
-                  file=sys.stderr)
+                  f"write {t['write_s']:.2f}s total {t['total_s']:.2f}s{' (cached)' if result.cached else ''}"
+                  f"{hidden}", file=sys.stderr)
     if args.random is not None:
         from ..render.contact import contact_sheet
-        sheet = contact_sheet([out for out, _ in targets], folder / "contact_sheet.png")
+        from ..render.outputs import CONTACT_SHEET
+        sheet = contact_sheet([out for out, _ in targets if out.exists()], folder / CONTACT_SHEET)
         print(f"contact sheet: {sheet}", file=sys.stderr)
     print(f"Blender log: {log_dir}", file=sys.stderr)
-    return 0
+    if unusable:
+        print(f"isu-validate render: {unusable} of {len(targets)} frame(s) could not show the scene (see above)",
+              file=sys.stderr)
+    return 1 if unusable else 0

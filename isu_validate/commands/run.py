@@ -1,21 +1,58 @@
-"""``isu-validate run`` (search) and ``isu-validate export`` (the tests table)."""
+"""``isu-validate run`` (search) and ``isu-validate export`` (the tests table).
+
+Options that decide what a run measures default to None here, so that ``--resume`` can
+tell the options a user typed from the ones left out: left out, the stored run's value
+is used; typed, it must equal the stored one (the run loop lists every difference).
+The defaults themselves live in ``RunConfig`` and ``PipelineConfig``.
+"""
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
+from dataclasses import fields
 from pathlib import Path
 
+from ..archive.run_file import RUN_FILE, ResumeMismatch, read_run_file
 from ..pipeline import PipelineConfig
+from ..render.visibility import DEFAULT_MIN_VISIBLE, parse_min_visible
 from .sut import parse_options
-from ..search import ALGORITHMS, RunConfig, RunError, run_search
+from ..search import ALGORITHMS, RunConfig, RunError, SUTErrorsStop, run_search
 
-DEFAULT_BUDGET = 40
+_PIPELINE, _RUN = PipelineConfig(run_dir=""), RunConfig(pipeline=PipelineConfig(run_dir=""))
+DEFAULT_BUDGET = _RUN.budget_tests
+# option (argparse dest) -> (RunConfig or PipelineConfig, field)
+SETTINGS = {
+    "sut": ("pipeline", "sut"), "mode": ("pipeline", "mode"), "space": ("pipeline", "space"),
+    "threshold": ("pipeline", "threshold"), "prompt": ("pipeline", "prompt"), "repeats": ("pipeline", "repeats"),
+    "preset": ("pipeline", "preset"), "camera": ("pipeline", "camera"), "cabin": ("pipeline", "cabin"),
+    "channels": ("pipeline", "channels"), "sut_timeout": ("pipeline", "sut_timeout_s"),
+    "extrinsics_from": ("pipeline", "extrinsics_from"), "min_visible": ("pipeline", "min_visible"),
+    "sut_option": ("pipeline", "sut_options"), "pipeline_factory": ("pipeline", "factory"),
+    "algorithm": ("run", "algorithm"), "pop_size": ("run", "pop_size"), "seed": ("run", "seed"),
+    "budget": ("run", "budget_tests"), "budget_time": ("run", "budget_s"), "workers": ("run", "workers"),
+    "cluster": ("run", "cluster"), "stop_after_sut_errors": ("run", "stop_after_sut_errors"),
+}
+EPILOG = f"""API keys come from the environment only, never from a flag or a file, and are never
+written to run.json, the archive, logs or reports:
+  openai:MODEL@URL   the key is read from $OPENAI_API_KEY, or from the variable named by
+                     --sut-option api_key_env=NAME (a local server without a key needs none)
+  http:URL           sent as "Authorization: Bearer ..." when --sut-option api_key_env=NAME names one
+  command:PROGRAM    the program inherits this environment and reads what it needs itself
+
+--resume continues the run in --out with its stored settings: leave the options out, or
+give the same values; a different value is refused and listed (a resumed run never
+silently measures something else). Only the budget may grow (--budget, --budget-time);
+--workers, --cluster and --stop-after-sut-errors may change (they do not change what is measured).
+
+exit status: 0 done; 1 stopped after --stop-after-sut-errors SUT errors in a row (the last
+error is printed; fix the SUT, then --resume); 2 a setting is wrong (nothing was written);
+130 interrupted (resume with --resume)."""
 
 
 def register(sub) -> None:
-    run = sub.add_parser("run", help="search the scene space for scenes the SUT gets wrong")
+    run = sub.add_parser("run", help="search the scene space for scenes the SUT gets wrong", epilog=EPILOG,
+                         formatter_class=argparse.RawDescriptionHelpFormatter)
     add_run_options(run)
     run.set_defaults(func=cmd_run)
 
@@ -27,60 +64,112 @@ def register(sub) -> None:
 
 
 def add_run_options(p) -> None:
+    d, r = _PIPELINE, _RUN
     p.add_argument("--out", type=Path, default=Path("runs/latest"), help="run directory (default runs/latest)")
-    p.add_argument("--resume", action="store_true", help="continue the run in --out after a crash or kill")
-    p.add_argument("--sut", default="reference", help="reference | openai:MODEL@BASE_URL | command:PROG ARGS | http:URL")
-    p.add_argument("--mode", choices=["vqa", "vc"], default="vqa", help="visual question answering or captioning")
-    p.add_argument("--space", default="isu-paper", help="scene space: shipped name or TOML path")
-    p.add_argument("--algorithm", choices=ALGORITHMS, default=ALGORITHMS[0],
-                   help="surrogate (default: surrogate-assisted, learns where the SUT errs), nsga2 (the paper's "
-                        "NSGA-II, for replication), rs (random search, the baseline)")
-    p.add_argument("--pop-size", type=int, default=10)
+    p.add_argument("--resume", action="store_true", help="continue the run in --out after a crash, a kill or a stop")
+    p.add_argument("--sut", help=f"reference | openai:MODEL@BASE_URL | command:PROG ARGS | http:URL (default {d.sut}; "
+                                 "API keys: see below)")
+    p.add_argument("--mode", choices=["vqa", "vc"], help=f"visual question answering or captioning (default {d.mode})")
+    p.add_argument("--space", help=f"scene space: shipped name or TOML path (default {d.space})")
+    p.add_argument("--algorithm", choices=ALGORITHMS, help=f"search algorithm (default {r.algorithm}): surrogate (surrogate-assisted, learns "
+                        "where the SUT errs), nsga2 (the paper's NSGA-II, for replication), rs (random search, the baseline)")
+    p.add_argument("--pop-size", type=int, help=f"population size (default {r.pop_size})")
     p.add_argument("--budget", type=int, help=f"number of tests (default {DEFAULT_BUDGET}; with --resume: extend the budget)")
     p.add_argument("--budget-time", type=float, help="wall-clock budget in seconds (instead of, or with, --budget)")
-    p.add_argument("--seed", type=int, default=1)
-    p.add_argument("--threshold", type=float, help="oracle threshold (default: 1.0 for vqa, F_emb 0.65 for vc)")
+    p.add_argument("--seed", type=int, help=f"random seed of the search (default {r.seed})")
+    p.add_argument("--threshold", type=float,
+                   help="oracle threshold in 0..1 (default: 1.0 for vqa, i.e. any mistake fails; F_emb 0.65 for vc)")
     p.add_argument("--prompt", help="override the prompt sent to the SUT")
-    p.add_argument("--repeats", type=int, default=1, help="ask each scene K times, majority vote")
-    p.add_argument("--preset", default="draft", help="render preset: draft | standard | final")
-    p.add_argument("--camera", default="default", help="camera rig: shipped name or TOML path")
-    p.add_argument("--cabin", default="default", help="cabin rig: shipped name or TOML path")
-    p.add_argument("--channels", default="", help="extra render channels, e.g. seg,depth")
-    p.add_argument("--sut-timeout", type=float, default=60.0, help="seconds per SUT request")
-    p.add_argument("--sut-option", action="append", default=[], metavar="NAME=VALUE",
+    p.add_argument("--repeats", type=int, help=f"ask each scene K times, majority vote (default {d.repeats})")
+    p.add_argument("--preset", help=f"render preset: draft | standard | final (default {d.preset})")
+    p.add_argument("--camera", help=f"camera rig: shipped name or TOML path (default {d.camera}); with an imaging "
+                                    "model from `isu-validate exposure`, renders are developed the way that camera would")
+    p.add_argument("--extrinsics-from", metavar="RIG",
+                   help="take the camera's pose in the cabin from this registered rig (for a calibrated camera "
+                        "file whose pose was never registered); recorded in run.json")
+    p.add_argument("--min-visible", action="append", metavar="SHARE|FEATURE=SHARE",
+                   help="a feature whose parts are seen less than this share is occluded: not judged, counted "
+                        f"apart (default: the space's min_visible, else {DEFAULT_MIN_VISIBLE}); repeatable")
+    p.add_argument("--cabin", help=f"cabin rig: shipped name or TOML path (default {d.cabin})")
+    p.add_argument("--channels", help="extra render channels, e.g. seg,depth (default none)")
+    p.add_argument("--sut-timeout", type=float, help=f"seconds per SUT request (default {d.sut_timeout_s:g})")
+    p.add_argument("--sut-option", action="append", metavar="NAME=VALUE",
                    help="adapter option, repeatable (see `isu-validate sut check --help`)")
-    p.add_argument("--workers", type=int, default=1, help="parallel evaluation processes")
+    p.add_argument("--stop-after-sut-errors", type=int, metavar="N",
+                   help=f"stop the run after N SUT errors in a row with no answer in between (default "
+                        f"{r.stop_after_sut_errors}; 0 never stops)")
+    p.add_argument("--workers", type=int, help="parallel evaluation processes (default 1)")
     p.add_argument("--cluster", help="Dask scheduler address (instead of local workers)")
     p.add_argument("--no-report", action="store_true", help="do not write report.html at the end")
     # where the renderer, SUT and judge come from (module:function); an extension point
-    p.add_argument("--pipeline-factory", default=PipelineConfig.factory, help=argparse.SUPPRESS)
+    p.add_argument("--pipeline-factory", help=argparse.SUPPRESS)
+
+
+def given_settings(args) -> dict[str, dict]:
+    """The options the user typed, as config values: {"run": {field: value}, "pipeline": {...}}."""
+    out: dict[str, dict] = {"run": {}, "pipeline": {}}
+    for dest, (part, field) in SETTINGS.items():
+        value = getattr(args, dest, None)
+        if value is None:
+            continue
+        if dest == "channels":
+            value = tuple(c.strip() for c in value.split(",") if c.strip())
+        elif dest == "sut_option":
+            value = parse_options(value)
+        elif dest == "min_visible":
+            value = parse_min_visible(value)
+        out[part][field] = value
+    return out
 
 
 def config_from_args(args) -> RunConfig:
-    if args.resume and (args.out / "run.json").exists():
-        stored = json.loads((args.out / "run.json").read_text())["config"]
-        stored_pipeline = stored.pop("pipeline")
-        pipeline = PipelineConfig(**{**stored_pipeline, "run_dir": str(args.out),
-                                     "channels": tuple(stored_pipeline["channels"]),
-                                     "render_threads": render_threads(args.workers)})
-        stored.update(workers=args.workers, cluster=args.cluster)
-        if args.budget is not None:
-            stored["budget_tests"] = args.budget
-        if args.budget_time is not None:
-            stored["budget_s"] = args.budget_time
-        return RunConfig(pipeline=pipeline, **stored)
-    budget_tests = args.budget if args.budget is not None else (None if args.budget_time else DEFAULT_BUDGET)
-    if budget_tests is not None and budget_tests < 1:
-        raise ValueError(f"--budget must be at least 1 test, got {budget_tests}")
-    pipeline = PipelineConfig(
-        run_dir=str(args.out), space=args.space, sut=args.sut, mode=args.mode, threshold=args.threshold,
-        prompt=args.prompt, repeats=args.repeats, preset=args.preset, camera=args.camera, cabin=args.cabin,
-        channels=tuple(c for c in args.channels.split(",") if c), sut_timeout_s=args.sut_timeout,
-        sut_options=parse_options(args.sut_option), render_threads=render_threads(args.workers),
-        factory=args.pipeline_factory)
-    return RunConfig(pipeline=pipeline, algorithm=args.algorithm, pop_size=args.pop_size, seed=args.seed,
-                     budget_tests=budget_tests, budget_s=args.budget_time, workers=args.workers,
-                     cluster=args.cluster)
+    given = given_settings(args)
+    run, pipeline = given["run"], given["pipeline"]
+    if "budget_s" in run and "budget_tests" not in run:
+        run["budget_tests"] = None  # a time budget alone: no test budget
+    # how the work is spread and when to stop: this invocation's choice, not the stored run's
+    volatile = {k: run.pop(k, getattr(_RUN, k)) for k in ("workers", "cluster", "stop_after_sut_errors")}
+    if args.resume and (args.out / RUN_FILE).exists():
+        stored = read_run_file(args.out).get("config", {})
+        stored_pipeline = _known(PipelineConfig, stored.get("pipeline", {}))
+        stored_pipeline["channels"] = tuple(stored_pipeline.get("channels", ()))
+        pipeline = {**stored_pipeline, **pipeline}
+        run = {**_known(RunConfig, stored), **run}
+    run.pop("pipeline", None)
+    config = PipelineConfig(**{**pipeline, "run_dir": str(args.out),
+                               "render_threads": render_threads(volatile["workers"])})
+    return RunConfig(pipeline=config, **{**run, **volatile})
+
+
+def _mismatch_message(exc: ResumeMismatch) -> str:
+    """The differences in the words the user typed (--seed, not seed)."""
+    flags = {(f"pipeline.{field}" if part == "pipeline" else field): "--" + dest.replace("_", "-")
+             for dest, (part, field) in SETTINGS.items()}
+    listed = "\n".join(f"  {_flag(d.setting, flags)}: {_shown(d.stored)} in the stored run, "
+                       f"{_shown(d.now)} now" for d in exc.differences)
+    return (f"{exc.run_dir} holds a run started with other settings:\n{listed}\n"
+            "leave these options out to resume it as it was started (or give the stored values), "
+            "or start a new run with another --out")
+
+
+def _flag(setting: str, flags: dict) -> str:
+    """--seed for "seed"; an entry of a dict-valued option by its key ("--min-visible luggage")."""
+    if setting in flags:
+        return flags[setting]
+    head, _, key = setting.rpartition(".")
+    return f"{flags[head]} {key}" if head in flags else setting
+
+
+def _shown(value) -> str:
+    if isinstance(value, list):
+        return ",".join(map(str, value)) or "(none)"
+    return "(default)" if value is None else repr(value) if isinstance(value, str) else str(value)
+
+
+def _known(cls, values: dict) -> dict:
+    """Only the fields this version knows (a run.json may come from an older or newer one)."""
+    names = {f.name for f in fields(cls)}
+    return {k: v for k, v in values.items() if k in names}
 
 
 def render_threads(workers: int) -> int:
@@ -92,11 +181,19 @@ def cmd_run(args) -> int:
     config = config_from_args(args)
     try:
         summary = run_search(config, resume=args.resume)
-    except RunError as exc:
+    except SUTErrorsStop as exc:
+        print(f"isu-validate run: stopped: {exc}", file=sys.stderr)
+        return 1
+    except ResumeMismatch as exc:
+        print(f"isu-validate run: error: {_mismatch_message(exc)}", file=sys.stderr)
+        return 2
+    except (RunError, ConnectionError) as exc:
         print(f"isu-validate run: error: {exc}", file=sys.stderr)
         return 2
     print(f"{summary.tests} tests ({summary.evaluated_now} evaluated now), {summary.failures} failing, "
           f"{summary.errors} with SUT/render errors; {summary.stopped_because}")
+    if summary.last_sut_error:
+        print(f"last SUT error: {summary.last_sut_error}")
     if not args.no_report:
         print(f"report: {write_report(summary.run_dir)}")
     print(f"run directory: {summary.run_dir}")

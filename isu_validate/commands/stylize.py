@@ -58,20 +58,34 @@ def register(sub) -> None:
 
 def run(args) -> int:
     import torch
+
+    from style_transfer.imageio import unreadable
     torch.set_num_threads(max(1, args.threads))
     if args.images[:1] == ["train"]:
         return _train(args)
     jobs = _jobs(args)
     stylise = _gatys_stylist(args) if args.method == "gatys" else _fast_stylist(args)
-    records = []
+    records, skipped = [], []
     for i, (src, dst) in enumerate(jobs, 1):
         start = time.perf_counter()
         # --resume: an interrupted run keeps what it finished (outputs are written atomically)
-        extra = {"resumed": True} if args.resume and dst.is_file() else stylise(src, dst)
+        if args.resume and dst.is_file():
+            extra = {"resumed": True}
+        elif reason := unreadable(src):  # one corrupt input must not cost the others
+            skipped.append({"source": str(src), "reason": reason})
+            print(f"stylize: {i}/{len(jobs)} skipped {src}: cannot read it as an image ({reason})", file=sys.stderr)
+            continue
+        else:
+            extra = stylise(src, dst)
         records.append(_record(src, dst, time.perf_counter() - start, extra))
         print(f"stylize: {i}/{len(jobs)} {dst} ({records[-1]['seconds']:.1f} s, "
               f"SSIM-luma {records[-1]['ssim_luma']:.3f})", file=sys.stderr)
+    if not records:
+        raise ValueError(f"none of the {len(jobs)} input image(s) could be read; see the messages above")
     summary = _summary(records, stylise.settings)
+    if skipped:
+        summary["skipped"] = skipped
+        print(f"stylize: skipped {len(skipped)} unreadable image(s), listed in the report", file=sys.stderr)
     if args.pairs and args.sut:
         summary["answer_flips"] = _flips(args)
     report = (args.pairs / "nst.json") if args.pairs else (args.out / "stylize.json")
@@ -100,8 +114,11 @@ def _jobs(args) -> list[tuple[Path, Path]]:
     if args.pairs:
         if args.images:
             raise ValueError("give either IMAGES with --out or --pairs DIR, not both")
-        from isu_validate.realism.sets import pairs_role
-        return [(sim, sim.with_name("nst.png")) for sim in pairs_role(args.pairs, "sim")]
+        from isu_validate.pairs import PairsDir
+        samples = [s for s in PairsDir(args.pairs).samples() if s.sim.is_file()]
+        if not samples:
+            raise ValueError(f"pairs directory {args.pairs} has no sim images to stylise")
+        return [(s.sim, s.nst) for s in samples]
     if not args.images or not args.out:
         raise ValueError("stylize needs IMAGES and --out DIR (or --pairs DIR); see isu-validate stylize --help")
     sources = _expand(args.images)
@@ -202,11 +219,10 @@ def _flips(args) -> dict:
     from style_transfer.preservation import answer_flips
     space = load_space(args.space)
     sut = open_sut(args.sut, space=space)
-    samples = []
-    for sim in sorted(args.pairs.glob("*/sim.png")):
-        scene_file = sim.with_name("scene.json")
-        if scene_file.is_file() and sim.with_name("nst.png").is_file():
-            samples.append((json.loads(scene_file.read_text()), sim, sim.with_name("nst.png")))
+    from isu_validate.pairs import PairsDir
+    # the scene comes out of the run's label (scene.json) through the one pairs reader
+    samples = [(s.scene(), s.sim, s.nst) for s in PairsDir(args.pairs).samples()
+               if s.scene_file.is_file() and s.sim.is_file() and s.nst.is_file()]
 
     def ask(scene, image):
         response = sut.query(build_request(space, scene, image, "vqa"))

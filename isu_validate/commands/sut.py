@@ -78,13 +78,23 @@ def all_questions(space) -> tuple[Question, ...]:
     return tuple(Question(f.name, f.question, f.options, f.weight, "") for f in space.predicted)
 
 
+def _check_image(path: Path) -> None:
+    if path.is_dir():
+        from ..realism.images import IMAGE_SUFFIXES
+
+        example = next((p for p in sorted(path.iterdir()) if p.suffix.lower() in IMAGE_SUFFIXES), None)
+        hint = f", e.g. {example}" if example else ""
+        raise ValueError(f"{path} is a folder; sut check asks about one image: give an image file{hint}")
+    if not path.is_file():
+        raise FileNotFoundError(f"image {path} does not exist")
+
+
 def check_command(args) -> int:
     from ..evaluate import make_judge
     from ..sut import build_request, open_sut
     from ..sut.prompt import vqa_prompt
 
-    if not args.image.is_file():
-        raise FileNotFoundError(f"image {args.image} does not exist")
+    _check_image(args.image)
     space = load_space(args.space)
     scene = space.check(load_scene(args.scene)) if args.scene else None
     if scene is not None:

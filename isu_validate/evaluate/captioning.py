@@ -3,17 +3,19 @@
 Four metrics (F_emb, BLEU, METEOR, BERTScore F1; settings in ``SETTINGS``), the primary
 one F_emb.  With repeats, every caption is scored and the metrics are averaged; the
 mean pairwise F_emb between the repeats is reported as the SUT's consistency.
-An empty caption scores 0 on every metric.
+An empty caption scores 0 on every metric.  Features the frame hides (``occluded``) are
+left out of the reference caption: every sentence that names one is dropped.
 """
 from __future__ import annotations
 
 from itertools import combinations
-from typing import Any, Mapping
+from typing import Any, Collection, Mapping
 
 from ..protocols import SUTRequest, SUTResponse, Verdict
 from ..space import SceneSpace
 from . import similarity, text_metrics
-from .oracles import CAPTION_METRICS, DEFAULT_THRESHOLD, check_conjunction, conjunction_failed, emb_failed
+from .oracles import (CAPTION_METRICS, DEFAULT_THRESHOLD, check_conjunction, check_threshold, conjunction_failed,
+                      emb_failed)
 from .reference_caption import reference_caption
 
 SETTINGS = {**text_metrics.SETTINGS, **similarity.SETTINGS}
@@ -37,24 +39,27 @@ class CaptionJudge:
             if isinstance(threshold, Mapping):
                 raise ValueError("the emb oracle takes one number (fail when F_emb <= it); "
                                  "per-metric thresholds belong to oracle='conjunction'")
-            self.threshold: Any = DEFAULT_THRESHOLD["vc"] if threshold is None else float(threshold)
+            self.threshold: Any = DEFAULT_THRESHOLD["vc"] if threshold is None else check_threshold(threshold)
         elif self.oracle == "conjunction":
             self.threshold = check_conjunction(threshold)
         else:
             raise ValueError(f"unknown captioning oracle {oracle!r}; use 'emb' (F_emb <= threshold) or "
                              "'conjunction' (every given metric at or below its threshold)")
 
-    def judge(self, scene: Mapping[str, Any], request: SUTRequest, response: SUTResponse) -> Verdict:
+    def judge(self, scene: Mapping[str, Any], request: SUTRequest, response: SUTResponse,
+              occluded: Collection[str] = ()) -> Verdict:
         settings = {"oracle": self.oracle, "threshold": self.threshold}
         if response.error:
             return Verdict({}, 1.0, False, {"sut_error": response.error, **settings})
-        reference = reference_caption(self.space, scene, self.templates)
+        # the reference says nothing about what the frame hides: no sentence naming an occluded feature
+        reference = reference_caption(self.space, scene, self.templates, hidden=occluded)
         captions = [c or "" for c in (response.extra.get("captions") or [response.caption])]
         scored = [caption_metrics(c, reference) for c in captions]
         fitness = {m: sum(s[m] for s in scored) / len(scored) for m in CAPTION_METRICS}
         failed = (emb_failed(fitness, self.threshold) if self.oracle == "emb"
                   else conjunction_failed(fitness, self.threshold))
         details: dict[str, Any] = {"reference_caption": reference, "metrics": SETTINGS, **settings,
+                                   "occluded": sorted(occluded),
                                    "truncated": any(similarity.is_truncated(c) for c in captions if c.strip())}
         if any(not c.strip() for c in captions):
             details["problems"] = ["empty caption: scored 0 on every metric"]

@@ -20,6 +20,19 @@ CAPTION_METRICS = ("f_emb", "f_bleu", "f_meteor", "f_bert")
 ORACLES = {"vqa": ("below",), "vc": ("emb", "conjunction")}
 
 
+def check_threshold(value: object, what: str = "threshold") -> float:
+    """Every fitness the oracles compare lies in 0..1: a threshold outside it (``--threshold 7``)
+    would fail every test or none, so it is refused."""
+    try:
+        number = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise ValueError(f"the {what} must be a number in 0..1, got {value!r}") from None
+    if not 0.0 <= number <= 1.0:  # NaN fails too
+        raise ValueError(f"the {what} must lie in 0..1 (the fitness it is compared with does), got {value!r}; "
+                         "e.g. 0.8 fails a VQA response below 80% weighted correct")
+    return number
+
+
 def vqa_failed(f_qa: float, threshold: float) -> bool:
     return f_qa < threshold
 
@@ -40,4 +53,4 @@ def check_conjunction(thresholds: object) -> dict[str, float]:
     if unknown:
         raise ValueError(f"unknown caption metric(s) {unknown} in the conjunction thresholds; "
                          f"known: {', '.join(CAPTION_METRICS)}")
-    return {k: float(v) for k, v in thresholds.items()}
+    return {k: check_threshold(v, f"{k} threshold") for k, v in thresholds.items()}

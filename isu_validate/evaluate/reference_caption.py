@@ -12,7 +12,7 @@ import tomllib
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Collection, Mapping
 
 from ..paths import data_dir
 from ..space import SceneSpace, SpaceError
@@ -33,11 +33,14 @@ class CaptionTemplate:
     sentences: tuple[Sentence, ...]
     phrases: Mapping[str, Mapping[str, str]]
 
-    def fill(self, space: SceneSpace, scene: Mapping[str, Any]) -> str:
+    def fill(self, space: SceneSpace, scene: Mapping[str, Any], hidden: Collection[str] = ()) -> str:
+        """The caption; ``hidden`` features (occluded in the frame) silence every sentence naming them."""
         canonical = space.canonical(scene)
         out = []
         for sentence in self.sentences:
             if any(name not in canonical for name in sentence.slots):
+                continue
+            if hidden and set(hidden) & set(sentence.slots + (sentence.when.features if sentence.when else ())):
                 continue
             if sentence.when is not None and not sentence.when.matches(canonical):
                 continue
@@ -118,6 +121,7 @@ def template_for(space: SceneSpace, folder: str | Path | None = None) -> Caption
     return _template_for(id(space), space, str(folder or data_dir() / "captions"))
 
 
-def reference_caption(space: SceneSpace, scene: Mapping[str, Any], folder: str | Path | None = None) -> str:
-    text = template_for(space, folder).fill(space, scene)
+def reference_caption(space: SceneSpace, scene: Mapping[str, Any], folder: str | Path | None = None,
+                      hidden: Collection[str] = ()) -> str:
+    text = template_for(space, folder).fill(space, scene, hidden)
     return re.sub(r",\s*$", ".", text) if not text.endswith(".") else text

@@ -6,17 +6,19 @@ ISU-Test code's weights sum to 1.5 against a 1.0 threshold; ours mean what they 
 Only the scene's active predicted features are scored: an answer about an inactive
 feature (luggage colour with no luggage) is ignored, never rewarded or punished.
 Each feature is ``correct``, ``wrong``, ``missing`` (not answered) or ``invalid`` (not
-one of its options); the last two count as not correct.
+one of its options); the last two count as not correct.  A feature the frame showed too
+little of (``occluded``, from the render label's visibility) is left out of the weights:
+F_qa is renormalised over the rest, so hiding a thing earns the search nothing.
 """
 from __future__ import annotations
 
-from typing import Any, Mapping
+from typing import Any, Collection, Mapping
 
 from ..protocols import SUTRequest, SUTResponse, Verdict
 from ..space import SceneSpace
-from .oracles import DEFAULT_THRESHOLD, vqa_failed
+from .oracles import DEFAULT_THRESHOLD, check_threshold, vqa_failed
 
-CORRECT, WRONG, MISSING, INVALID = "correct", "wrong", "missing", "invalid"
+CORRECT, WRONG, MISSING, INVALID, OCCLUDED = "correct", "wrong", "missing", "invalid", "occluded"
 
 
 class VQAJudge:
@@ -24,9 +26,10 @@ class VQAJudge:
 
     def __init__(self, space: SceneSpace, threshold: float | None = None):
         self.space = space
-        self.threshold = DEFAULT_THRESHOLD["vqa"] if threshold is None else float(threshold)
+        self.threshold = DEFAULT_THRESHOLD["vqa"] if threshold is None else check_threshold(threshold)
 
-    def judge(self, scene: Mapping[str, Any], request: SUTRequest, response: SUTResponse) -> Verdict:
+    def judge(self, scene: Mapping[str, Any], request: SUTRequest, response: SUTResponse,
+              occluded: Collection[str] = ()) -> Verdict:
         if response.error:
             # Not a failure-inducing scene: no fitness is measured, and the search is not drawn to it.
             return Verdict({}, 1.0, False, {"sut_error": response.error, "threshold": self.threshold})
@@ -42,12 +45,20 @@ class VQAJudge:
                 status = INVALID
             else:
                 status = CORRECT if given == q.truth else WRONG
+            if q.key in occluded:   # the answer is kept for the record, never scored
+                features[q.key] = {"status": OCCLUDED, "answer": given, "truth": q.truth, "weight": q.weight,
+                                   "would_be": status}
+                continue
             features[q.key] = {"status": status, "answer": given, "truth": q.truth, "weight": q.weight}
             weights[q.key] = q.weight
-        f_qa, weighting = _weighted_score(features, weights)
-        counts = {s: sum(f["status"] == s for f in features.values()) for s in (CORRECT, WRONG, MISSING, INVALID)}
-        details = {"features": features, "counts": counts, "threshold": self.threshold, "weighting": weighting,
+        counts = {s: sum(f["status"] == s for f in features.values())
+                  for s in (CORRECT, WRONG, MISSING, INVALID, OCCLUDED)}
+        details = {"features": features, "counts": counts, "threshold": self.threshold,
                    "ignored": sorted(set(answers) - set(features))}
+        if features and not weights:   # everything asked was hidden: nothing was measured
+            return Verdict({}, 1.0, False, {**details, "no_verdict": "every feature asked about is occluded"})
+        scored = {k: f for k, f in features.items() if f["status"] != OCCLUDED}
+        f_qa, details["weighting"] = _weighted_score(scored, weights)
         return Verdict({"f_qa": f_qa}, f_qa, vqa_failed(f_qa, self.threshold), details)
 
 

@@ -10,7 +10,9 @@ from pathlib import Path
 import numpy as np
 from PIL import Image, UnidentifiedImageError
 
-IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp")
+from ..pairs import IMAGE_SUFFIXES  # one list of the image files every set reader accepts
+
+__all__ = ["IMAGE_SUFFIXES", "ImageError", "list_images", "read_rgb"]
 
 
 class ImageError(ValueError):
@@ -45,13 +47,22 @@ def _to_rgb_float(img: Image.Image) -> np.ndarray:
 
 
 def list_images(folder: str | Path) -> list[Path]:
-    """The image files directly inside ``folder``, sorted by name."""
+    """The image files directly inside ``folder``, sorted by name, frames only."""
+    return list_frames(folder)[0]
+
+
+def list_frames(folder: str | Path) -> tuple[list[Path], list[Path]]:
+    """(frames, left out): the render by-products among the images (a contact sheet, segmentation
+    and depth images) are no samples of a domain and would bias FID/KID."""
+    from ..render.outputs import by_product
+
     folder = Path(folder)
     if not folder.is_dir():
         raise FileNotFoundError(f"image folder {folder} does not exist")
-    found = sorted(p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_SUFFIXES)
+    images = sorted(p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_SUFFIXES)
+    found = [p for p in images if not by_product(p)]
     if not found:
         raise ImageError(
             f"folder {folder} holds no images ({', '.join(IMAGE_SUFFIXES)}); "
             "point to a folder of images, or to a pairs directory as PAIRS_DIR:sim|real|nst")
-    return found
+    return found, [p for p in images if by_product(p)]

@@ -12,7 +12,8 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from .cabin import CabinRigError, load_cabin
-from .camera import CameraRig, CameraRigError, camera_from_dict, load_camera, look_at_rotation, pinhole_plan
+from .camera import (CameraRig, CameraRigError, camera_from_dict, load_camera, load_render_camera, look_at_rotation,
+                     pinhole_plan)
 from .presets import PRESETS, Preset, get_preset
 from .renderer import DEFAULTS, RENDERER_VERSION, BlenderRenderer
 
@@ -20,10 +21,17 @@ from .renderer import DEFAULTS, RENDERER_VERSION, BlenderRenderer
 def open_renderer(preset: "str | Preset" = "draft", camera: str | os.PathLike | CameraRig = "default",
                   cabin: str | os.PathLike = "default", channels: Sequence[str] | str = (),
                   cache_dir: str | os.PathLike | None = None, log_dir: str | os.PathLike | None = None,
-                  timeout_s: float = 240.0, space=None, threads: int = 0) -> BlenderRenderer:
+                  timeout_s: float = 240.0, space=None, threads: int = 0,
+                  extrinsics_from: str | os.PathLike | CameraRig | None = None,
+                  min_visible: Mapping[str, float] | None = None) -> BlenderRenderer:
     """A renderer for one process. Its Blender worker starts on the first render (each process of a
-    pool gets its own); ``close()`` stops it. ``channels``: any of "seg", "depth", "exr"."""
-    return BlenderRenderer(preset, camera, cabin, channels, cache_dir, log_dir, timeout_s, space, threads)
+    pool gets its own); ``close()`` stops it. ``channels``: any of "seg", "depth", "exr".
+
+    A camera file whose pose was never registered is refused (CameraRigError) unless
+    ``extrinsics_from`` names a registered rig to take the pose from. ``min_visible`` overrides the
+    space's per-feature visibility thresholds ({feature or "*": share})."""
+    return BlenderRenderer(preset, camera, cabin, channels, cache_dir, log_dir, timeout_s, space, threads,
+                           extrinsics_from, min_visible)
 
 
 def render_board(image_path: str | os.PathLike, board_size_m: tuple[float, float], pose, out: str | os.PathLike,
@@ -49,5 +57,5 @@ def render_board(image_path: str | os.PathLike, board_size_m: tuple[float, float
 
 
 __all__ = ["BlenderRenderer", "CabinRigError", "CameraRig", "CameraRigError", "DEFAULTS", "PRESETS", "Preset",
-           "RENDERER_VERSION", "camera_from_dict", "get_preset", "load_cabin", "load_camera", "look_at_rotation",
-           "open_renderer", "pinhole_plan", "render_board"]
+           "RENDERER_VERSION", "camera_from_dict", "get_preset", "load_cabin", "load_camera", "load_render_camera",
+           "look_at_rotation", "open_renderer", "pinhole_plan", "render_board"]

@@ -81,7 +81,8 @@ def _bench_preset(preset, scenes, refs, args, space) -> dict:
     from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
     from . import open_renderer
-    times, psnr, ssim, parts = [], [], [], {"update_s": [], "render_s": [], "write_s": [], "worker_cpu_s": []}
+    times, psnr, ssim = [], [], []
+    parts = {"update_s": [], "render_s": [], "write_s": [], "worker_cpu_s": [], "footprint_s": []}
     with open_renderer(preset, args.rig, log_dir=args.out / "logs") as r:
         r.render(scenes[0], args.out / f"{preset.name}-warmup.png")   # kernel load, first BVH: not timed
         for k in range(args.repeat):
@@ -90,7 +91,7 @@ def _bench_preset(preset, scenes, refs, args, space) -> dict:
                 result = r.render(scene, out)
                 times.append(result.timings["total_s"])
                 for key in parts:
-                    parts[key].append(result.timings[key])
+                    parts[key].append(result.timings.get(key, 0.0))
                 if k == 0:
                     img = cv2.imread(str(out))
                     if img.shape != ref.shape:
@@ -134,5 +135,6 @@ def _print_row(row: dict) -> None:
           f"PSNR {row['psnr_db']:.1f} dB  SSIM {row['ssim']:.4f}  "
           + (f"SUT unchanged {row['sut_unchanged']:.1%}  " if row.get("sut_unchanged") is not None else "") +
           f"[update {row['median_parts_s']['update_s']:.3f} render {row['median_parts_s']['render_s']:.2f} "
-          f"write {row['median_parts_s']['write_s']:.2f}; worker CPU {row['median_parts_s']['worker_cpu_s']:.2f} s]",
+          f"write {row['median_parts_s']['write_s']:.2f}; worker CPU {row['median_parts_s']['worker_cpu_s']:.2f} s; "
+          f"footprints {1000 * row['median_parts_s']['footprint_s']:.0f} ms]",
           flush=True)

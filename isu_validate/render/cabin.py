@@ -40,7 +40,8 @@ def load_cabin(name_or_path: str | os.PathLike = "default") -> dict:
 
 def cabin_hash(cabin: dict) -> str:
     """Identifies the cabin's content (asset files by their bytes): part of the render cache key."""
-    content = {k: v for k, v in cabin.items() if k not in ("source", "name")}
+    # `recreate` holds words and measurements for recreation sheets: it never changes a render
+    content = {k: v for k, v in cabin.items() if k not in ("source", "name", "recreate")}
     digest = hashlib.sha256(json.dumps(content, sort_keys=True, default=str).encode())
     for part in sorted(cabin.get("assets", {})):
         digest.update(Path(cabin["assets"][part]["file"]).read_bytes())

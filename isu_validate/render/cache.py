@@ -12,8 +12,7 @@ from pathlib import Path
 
 class RenderCache:
     def __init__(self, root: str | os.PathLike):
-        self.root = Path(root)
-        self.root.mkdir(parents=True, exist_ok=True)
+        self.root = Path(root)  # made by the first put: opening a cache writes nothing
 
     def _entry(self, key: str) -> Path:
         return self.root / key[:2] / key

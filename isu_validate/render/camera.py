@@ -7,6 +7,9 @@ rig's lens) and calibration (projecting known cabin points). Conventions:
 - ``rotation`` is R_cabin_from_camera: its columns are the camera's OpenCV axes (x right, y down,
   z forward) in cabin coordinates;
 - pixel centres at integer coordinates (OpenCV), so the centre of a 640-wide image is x = 319.5.
+
+The file's optional ``[exposure]``/``[response]``/``[noise]``/``[colour]`` tables are the camera's
+imaging model, parsed by ``capture.camera_model.model`` (the one reader of that part).
 """
 from __future__ import annotations
 
@@ -19,6 +22,9 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+
+from capture.camera_model.model import ImagingModel, ImagingModelError
+from capture.camera_model.model import from_dict as imaging_from_dict
 
 from ..paths import resolve_rig
 from ..tomlfile import read_toml
@@ -46,6 +52,11 @@ class CameraRig:
     rotation: tuple[tuple[float, ...], ...]   # R_cabin_from_camera, row-major
     source: str = "<memory>"
     extra: dict = field(default_factory=dict, compare=False, hash=False)
+    registered: bool = True      # False: [extrinsics] is the placeholder `calibrate` writes before registration
+    pose_source: str = ""        # the rig the pose was taken from (--extrinsics-from), "" = this file
+    # the camera's exposure/response/noise/colour model (capture/camera_model), applied to the linear
+    # render after it is warped through the lens; None renders the linear light as sRGB, as before
+    imaging: "ImagingModel | None" = field(default=None, compare=False, hash=False)
 
     # ------------------------------------------------------------------ matrices
     @property
@@ -117,6 +128,12 @@ class CameraRig:
         return replace(self, width=w, height=h, fx=self.fx * sx, fy=self.fy * sy,
                        cx=(self.cx + 0.5) * sx - 0.5, cy=(self.cy + 0.5) * sy - 0.5)
 
+    def with_pose_of(self, other: "CameraRig") -> "CameraRig":
+        """This camera (lens, image) at the cabin pose of ``other``: ``--extrinsics-from OTHER``."""
+        require_registered(other, "the --extrinsics-from rig")
+        return replace(self, position=other.position, rotation=other.rotation, registered=True,
+                       pose_source=other.source)
+
     def to_dict(self) -> dict:
         return {"name": self.name, "image": {"width": self.width, "height": self.height},
                 "intrinsics": {"model": self.model, "fx": self.fx, "fy": self.fy, "cx": self.cx, "cy": self.cy,
@@ -155,9 +172,42 @@ def camera_from_dict(raw: dict, where: str = "<camera rig>") -> CameraRig:
     if len(position) != 3:
         raise CameraRigError(f"{where}: [extrinsics] position needs 3 numbers (metres), got {list(position)}")
     rotation = _rotation(extr, np.array(position), where)
+    try:
+        imaging = imaging_from_dict(raw, where)
+    except ImagingModelError as exc:
+        raise CameraRigError(str(exc)) from None
+    registered = extr.get("registered", True)   # hand-written rigs carry no flag: their pose is meant
+    if not isinstance(registered, bool):
+        raise CameraRigError(f"{where}: [extrinsics] registered must be true or false, got {registered!r}")
     return CameraRig(str(raw.get("name", Path(where).stem)), width, height, model, fx, fy, cx, cy, dist,
                      position, tuple(tuple(float(v) for v in row) for row in rotation), where,
-                     {k: v for k, v in raw.items() if k not in ("name", "image", "intrinsics", "extrinsics")})
+                     {k: v for k, v in raw.items() if k not in ("name", "image", "intrinsics", "extrinsics")},
+                     registered, imaging=imaging)
+
+
+def load_render_camera(camera: "str | os.PathLike | CameraRig" = "default",
+                       extrinsics_from: "str | os.PathLike | CameraRig | None" = None) -> CameraRig:
+    """The rig a render uses: ``camera`` (its pose replaced by that of ``extrinsics_from`` when given),
+    refused with the fix when its pose was never registered in the cabin."""
+    rig = camera if isinstance(camera, CameraRig) else load_camera(camera)
+    if extrinsics_from is not None:
+        other = extrinsics_from if isinstance(extrinsics_from, CameraRig) else load_camera(extrinsics_from)
+        rig = rig.with_pose_of(other)
+    require_registered(rig)
+    return rig
+
+
+def require_registered(rig: CameraRig, role: str = "the camera") -> None:
+    """An unregistered pose (the cabin origin looking forward) renders the dashboard or nothing at all:
+    every test would be judged on an image of no scene."""
+    if rig.registered:
+        return
+    raise CameraRigError(
+        f"{rig.source}: {role}'s pose in the cabin was never registered ([extrinsics] registered = false: "
+        f"the placeholder pose `isu-validate calibrate` writes, at the cabin origin looking forward). Register it "
+        f"from a photo of the cabin markers: `isu-validate calibrate register {rig.source} MARKER_SHOT.png "
+        f"--markers MARKERS.toml`, or take the pose from a registered rig with --extrinsics-from RIG "
+        f"(e.g. --extrinsics-from default)")
 
 
 def _table(raw: dict, key: str, where: str) -> dict:

@@ -14,8 +14,10 @@ INSTANCES = {
     5: ("steering_wheel", "steering_wheel"), 6: ("driver", "driver"), 7: ("seat_belt", "seat_belt"),
     8: ("phone", "phone"), 9: ("child_seat", "child_seat"), 10: ("child", "child"), 11: ("luggage", "luggage"),
     12: ("cola_bottle", "cola_bottle"), 13: ("can", "can"), 14: ("interior_light", "interior_light"),
-    15: ("board", "board"),
+    15: ("board", "board"), 16: ("driver_face", "driver"),
 }
+# driver_face: the driver's head (face, hair, ears); the rest of the body stays "driver". A body model
+# that replaces the procedural driver keeps both pass indices (see README: per-feature visibility).
 INSTANCE_ID = {name: i for i, (name, _) in INSTANCES.items()}
 CLASS_ID = {name: i for i, name in CLASSES.items()}
 

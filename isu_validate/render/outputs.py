@@ -10,9 +10,15 @@ import numpy as np
 
 from .camera import PinholePlan, warp
 from .exr import read_exr, write_exr
+from .footprint import unpack_counts
 from .labels import INSTANCES, class_map, semantic_lut
 
 CHANNELS = ("seg", "depth", "exr")
+# What a frame x.png gets beside it (x.seg.png, ...), and the sheet `render --random` adds to a folder:
+# files that are not frames, which image sets (FID/KID) must leave out.
+BESIDE = {"seg": ".seg.png", "semantic": ".semantic.png", "classes": ".seg.json", "depth": ".depth.png",
+          "exr": ".exr", "label": ".label.json"}
+CONTACT_SHEET = "contact_sheet.png"
 
 
 def parse_channels(channels) -> tuple[str, ...]:
@@ -42,18 +48,27 @@ def srgb_encode(linear: np.ndarray) -> np.ndarray:
 def channel_paths(out: Path) -> dict[str, Path]:
     """Where each output goes, beside the image: images/x.png -> images/x.seg.png etc."""
     stem = out.with_suffix("")
-    return {"seg": stem.with_name(stem.name + ".seg.png"), "semantic": stem.with_name(stem.name + ".semantic.png"),
-            "classes": stem.with_name(stem.name + ".seg.json"), "depth": stem.with_name(stem.name + ".depth.png"),
-            "exr": stem.with_name(stem.name + ".exr"), "label": stem.with_name(stem.name + ".label.json")}
+    return {name: stem.with_name(stem.name + suffix) for name, suffix in BESIDE.items()}
 
 
-def write_outputs(exr_path: Path, plan: PinholePlan, out: Path, channels: tuple[str, ...]) -> tuple[dict, dict]:
-    """Write the image and requested channels; return (paths by channel, per-instance visibility)."""
+def by_product(path: str | Path) -> str | None:
+    """What a render output that is not a frame is ("contact sheet", "seg channel"...), or None for a frame."""
+    name = Path(path).name
+    if name == CONTACT_SHEET:
+        return "contact sheet"
+    return next((f"{channel} channel" for channel, suffix in BESIDE.items() if name.endswith(suffix)), None)
+
+
+def write_outputs(exr_path: Path, plan: PinholePlan, out: Path, channels: tuple[str, ...],
+                  develop=srgb_encode) -> tuple[dict, dict]:
+    """Write the image and requested channels; return (paths by channel, per-instance visibility).
+    ``develop`` turns the warped linear RGB into the 8-bit image: sRGB, or the rig camera's imaging
+    model (exposure, response, noise, colour; see ``renderer.BlenderRenderer._develop``)."""
     passes = read_exr(exr_path)
     rgb = np.dstack([_pass(passes, f"Combined.{c}") for c in "RGB"])
     rgb = warp(rgb, plan)
     out.parent.mkdir(parents=True, exist_ok=True)
-    if not cv2.imwrite(str(out), cv2.cvtColor(srgb_encode(rgb), cv2.COLOR_RGB2BGR)):
+    if not cv2.imwrite(str(out), cv2.cvtColor(develop(rgb), cv2.COLOR_RGB2BGR)):
         raise OSError(f"could not write {out}")
     paths, where = {}, channel_paths(out)
     ids = warp(np.rint(_pass(passes, "Index.X")).astype(np.uint16), plan, nearest=True)
@@ -84,3 +99,11 @@ def _visibility(ids: np.ndarray) -> dict:
             out[INSTANCES[i][0]] = {"id": i, "pixels": int(n),
                                     "bbox": [int(xs.min()), int(ys.min()), int(xs.max()), int(ys.max())]}
     return out
+
+
+def footprint_pixels(path: Path, plan: PinholePlan, parts: list[str]) -> dict[str, int]:
+    """Pixel count of each part's unoccluded footprint (the worker's packed masks), after the same
+    lens warp as the segmentation."""
+    planes = np.load(path)
+    warped = np.stack([warp(plane, plan, nearest=True) for plane in planes])
+    return dict(zip(parts, unpack_counts(warped, len(parts))))

@@ -1,6 +1,7 @@
 """The Blender renderer behind the ``Renderer`` protocol: validates a scene, looks it up in the cache,
-asks the warm worker for the passes, writes the outputs, and survives a worker crash or hang (one
-restart and retry, then RenderError)."""
+asks the warm worker for the passes and the parts' unoccluded footprints, writes the outputs and the
+label (per-feature visibility, frame checks), and survives a worker crash or hang (one restart and
+retry, then RenderError)."""
 from __future__ import annotations
 
 import hashlib
@@ -12,17 +13,21 @@ import time
 from pathlib import Path
 from typing import Any, Mapping
 
+from capture.camera_model.apply import apply as apply_imaging
+
 from ..protocols import RenderError, RenderResult
 from ..space import SceneSpace, load_space
 from .cabin import cabin_hash, load_cabin
 from .cache import RenderCache
-from .camera import CameraRig, load_camera, pinhole_plan
-from .outputs import channel_paths, parse_channels, write_outputs
+from .camera import CameraRig, load_render_camera, pinhole_plan
+from .frame_check import frame_problem, frame_stats
+from .outputs import channel_paths, footprint_pixels, parse_channels, srgb_encode, write_outputs
 from .presets import Preset, get_preset
+from .visibility import feature_visibility, min_visible_for, needed_parts, part_shares
 from .worker import BlenderWorker, WorkerCrashed, WorkerFailed, WorkerTimeout
 
 # bump when the scene content or the outputs change: it is part of every cache key
-RENDERER_VERSION = "isu-blender-1"
+RENDERER_VERSION = "isu-blender-2"   # 2: driver_face part, footprints
 
 # what the worker shows for a feature the scene space does not have (or that is inactive)
 DEFAULTS = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height": "H2", "driver_weight": "W2",
@@ -35,14 +40,17 @@ DEFAULTS = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height
 class BlenderRenderer:
     def __init__(self, preset: str | Preset = "draft", camera: str | os.PathLike | CameraRig = "default",
                  cabin: str | os.PathLike | dict = "default", channels=(), cache_dir=None, log_dir=None,
-                 timeout_s: float = 240.0, space: SceneSpace | str | None = None, threads: int = 0):
+                 timeout_s: float = 240.0, space: SceneSpace | str | None = None, threads: int = 0,
+                 extrinsics_from: str | os.PathLike | CameraRig | None = None, min_visible=None):
         self.preset = get_preset(preset, threads=threads) if isinstance(preset, str) else preset
-        self.rig = camera if isinstance(camera, CameraRig) else load_camera(camera)
+        self.rig = load_render_camera(camera, extrinsics_from)   # refuses an unregistered pose
         self.render_rig = self.rig.scaled(self.preset.scale)
         self.plan = pinhole_plan(self.render_rig)
         self.cabin = cabin if isinstance(cabin, dict) else load_cabin(cabin)
         self.channels = parse_channels(channels)
         self.space = space if isinstance(space, SceneSpace) else load_space(space or "isu-paper")
+        self.parts = needed_parts(self.space)                        # whose footprints each frame needs
+        self.min_visible = min_visible_for(self.space, min_visible)  # feature -> threshold
         self.cache = RenderCache(cache_dir) if cache_dir else None
         self.log_path = Path(log_dir or Path(tempfile.gettempdir()) / "isu-validate-logs") / f"blender-{os.getpid()}.log"
         self.timeout_s = timeout_s
@@ -51,32 +59,58 @@ class BlenderRenderer:
         self._owner = os.getpid()
         self._count = 0
         self.unrendered = sorted(set(self.space.names) - set(DEFAULTS))
-        self._identity = hashlib.sha256(json.dumps(
-            [RENDERER_VERSION, self.render_rig.hash, cabin_hash(self.cabin), self.preset.to_worker(),
-             self.preset.scale, self.channels], sort_keys=True).encode()).hexdigest()
+        self.imaging = self.rig.imaging       # the camera's imaging model; None = linear light as sRGB
+        identity = [RENDERER_VERSION, self.render_rig.hash, cabin_hash(self.cabin), self.preset.to_worker(),
+                    self.preset.scale, self.channels, self.parts]
+        if self.imaging is not None:          # a camera without a model keeps its cache keys
+            identity.append(self.imaging.hash)
+        self._identity = hashlib.sha256(json.dumps(identity, sort_keys=True).encode()).hexdigest()
 
     # ------------------------------------------------------------------ protocol
     def render(self, scene: Mapping[str, Any], out: Path) -> RenderResult:
-        """Render a valid scene to ``out`` (PNG). An invalid scene raises SpaceError (a ValueError)
-        naming the problem before Blender sees it; a failed render raises RenderError."""
+        """Render a valid scene to ``out`` (PNG) with its label: what each feature's parts show
+        (``visibility``, ``occluded``). An invalid scene raises SpaceError (a ValueError) naming the
+        problem before Blender sees it; a failed render, or a frame that cannot show the scene (black,
+        saturated, no driver: written, then refused), raises RenderError."""
         t0 = time.perf_counter()
         out = Path(out)
         canonical = self.space.check(scene)
         key = self.cache_key(canonical)
-        where = channel_paths(out)
-        if self.cache:
-            hit = self.cache.get(key, out, where)
-            if hit:
-                timings = {"update_s": 0.0, "render_s": 0.0, "write_s": time.perf_counter() - t0}
-                timings["total_s"] = time.perf_counter() - t0
-                self._write_label(where["label"], canonical, hit["meta"].get("visible", {}), timings, key, True)
-                return RenderResult(out, {**hit["channels"], "label": where["label"]}, timings, cached=True)
-        paths, visible, timings = self._render_with_retry({**DEFAULTS, **canonical}, out, {}, tag=key[:12])
+        developed: dict = {}
+        paths, visible, parts, timings, cached = self._frame(canonical, key, out, developed)
         timings["total_s"] = time.perf_counter() - t0
+        shares, occluded = feature_visibility(self.space, canonical, parts, self.min_visible)
+        frame = frame_stats(out)
+        problem = frame_problem(frame, visible)
+        label = channel_paths(out)["label"]
+        self._write_label(label, canonical, key, cached, timings, {
+            "visible": visible, "parts": parts, "frame": frame, "frame_problem": problem,
+            "visibility": shares, "occluded": occluded, "min_visible": self.min_visible,
+            **({"imaging": {"model": self.imaging.hash, "exposure": developed.get("exposure")}}
+               if self.imaging is not None else {})})
+        if problem:
+            raise RenderError(f"unusable frame: {problem}", image=out)
+        return RenderResult(out, {**paths, "label": label}, timings, cached=cached, visibility=shares,
+                            occluded=occluded)
+
+    def _frame(self, canonical: dict, key: str, out: Path, developed: dict):
+        """(files by channel, visible instances, part shares, timings, cached): from the cache when it
+        holds the scene, else rendered and put there. ``developed`` receives what the camera's imaging
+        model chose (exposure time, gain, metered level)."""
+        t0 = time.perf_counter()
+        hit = self.cache.get(key, out, channel_paths(out)) if self.cache else None
+        if hit:
+            timings = {"update_s": 0.0, "render_s": 0.0, "write_s": time.perf_counter() - t0}
+            developed["exposure"] = hit["meta"].get("exposure")
+            return hit["channels"], hit["meta"]["visible"], hit["meta"]["parts"], timings, True
+        paths, visible, footprints, timings = self._render_with_retry({**DEFAULTS, **canonical}, out, {},
+                                                                      tag=key[:12], parts=self.parts,
+                                                                      developed=developed)
+        parts = part_shares(visible, footprints)
         if self.cache:
-            self.cache.put(key, out, paths, {"scene": canonical, "visible": visible, "timings": timings})
-        self._write_label(where["label"], canonical, visible, timings, key, False)
-        return RenderResult(out, {**paths, "label": where["label"]}, timings, cached=False)
+            self.cache.put(key, out, paths, {"scene": canonical, "visible": visible, "parts": parts,
+                                             "timings": timings, "exposure": developed.get("exposure")})
+        return paths, visible, parts, timings, False
 
     def close(self) -> None:
         if self._worker is not None and os.getpid() == self._owner:
@@ -97,7 +131,7 @@ class BlenderRenderer:
         features = {**DEFAULTS, **(self.space.check(scene) if scene is not None else {})}
         if scene is None:
             extras = {"hide_driver": True, **extras}
-        paths, _, timings = self._render_with_retry(features, Path(out), extras, tag="extras")
+        paths, _, _, timings = self._render_with_retry(features, Path(out), extras, tag="extras")
         timings["total_s"] = time.perf_counter() - t0
         return RenderResult(Path(out), paths, timings)
 
@@ -125,11 +159,12 @@ class BlenderRenderer:
                 raise RenderError(f"could not start the Blender worker: {exc}") from exc
         return self._worker
 
-    def _render_with_retry(self, features: dict, out: Path, extras: dict, tag: str):
+    def _render_with_retry(self, features: dict, out: Path, extras: dict, tag: str, parts=(),
+                           developed: dict | None = None):
         last = None
         for attempt in (1, 2):
             try:
-                return self._render_once(features, out, extras, tag)
+                return self._render_once(features, out, extras, tag, list(parts), developed)
             except (WorkerCrashed, WorkerTimeout) as exc:   # restart and retry once
                 last = exc
                 if self._worker is not None:
@@ -139,30 +174,52 @@ class BlenderRenderer:
                 raise RenderError(f"Blender failed on this scene: {exc} (log: {self.log_path})") from exc
         raise RenderError(f"render failed twice (worker restarted in between): {last}")
 
-    def _render_once(self, features: dict, out: Path, extras: dict, tag: str):
+    def _render_once(self, features: dict, out: Path, extras: dict, tag: str, parts: list[str],
+                     developed: dict | None = None):
         worker = self._ensure_worker()
         self._count += 1
         exr = self._tmp / f"frame-{self._count}.exr"
-        camera = {**self.plan.blender_camera(), "position": list(self.render_rig.position),
-                  "rotation": [list(r) for r in self.render_rig.rotation]}
+        masks = self._tmp / f"frame-{self._count}.parts.npy"
+        camera = {**self.plan.blender_camera(), "f": self.plan.f, "cx": self.plan.cx, "cy": self.plan.cy,
+                  "position": list(self.render_rig.position), "rotation": [list(r) for r in self.render_rig.rotation]}
         reply = worker.request({"op": "render", "features": features, "camera": camera, "extras": extras,
-                                "preset": self.preset.to_worker(), "exr": str(exr), "tag": tag}, self.timeout_s)
+                                "preset": self.preset.to_worker(), "exr": str(exr), "tag": tag,
+                                "footprints": parts, "footprint_file": str(masks)}, self.timeout_s)
         t = time.perf_counter()
         try:
-            paths, visible = write_outputs(exr, self.plan, out, self.channels)
+            paths, visible = write_outputs(exr, self.plan, out, self.channels,
+                                           self._developer(tag, {} if developed is None else developed))
+            footprints = footprint_pixels(masks, self.plan, parts) if parts else {}
         except (OSError, KeyError, ValueError) as exc:   # unreadable passes or an unwritable output
             raise RenderError(f"could not write the render of this scene to {out}: {exc}") from exc
         finally:
             exr.unlink(missing_ok=True)
+            masks.unlink(missing_ok=True)
         timings = {"update_s": reply["update_s"], "render_s": reply["render_s"],
                    "write_s": reply["save_s"] + time.perf_counter() - t, "worker_cpu_s": reply["cpu_s"]}
-        return paths, visible, timings
+        if parts:
+            timings["footprint_s"] = reply["footprint_s"]
+        return paths, visible, footprints, timings
 
-    def _write_label(self, path: Path, canonical: dict, visible: dict, timings: dict, key: str, cached: bool):
+    def _developer(self, tag: str, developed: dict):
+        """The post-render step: linear light through the camera's imaging model (or plain sRGB).
+        Its noise is seeded by the scene's cache key, so a scene renders to the same frame every time."""
+        if self.imaging is None:
+            return srgb_encode
+
+        def develop(rgb):
+            seed = int(hashlib.sha256(tag.encode()).hexdigest()[:8], 16)
+            image, exposure = apply_imaging(rgb, self.imaging, seed=seed)
+            developed["exposure"] = exposure.to_dict() if exposure is not None else None
+            return image
+        return develop
+
+    def _write_label(self, path: Path, canonical: dict, key: str, cached: bool, timings: dict, seen: dict):
         label = {"scene": canonical, "space": self.space.name, "preset": self.preset.name,
                  "renderer": RENDERER_VERSION, "cache_key": key, "cached": cached,
                  "camera": self.render_rig.to_dict(), "camera_source": self.rig.source,
-                 "cabin": self.cabin.get("source"), "visible": visible, "timings": timings}
+                 "extrinsics_from": self.rig.pose_source or None,
+                 "cabin": self.cabin.get("source"), **seen, "timings": timings}
         if self.unrendered:
             label["unrendered_features"] = self.unrendered
         path.write_text(json.dumps(label, indent=1))

@@ -3,6 +3,10 @@
 Resuming replays the search from its seed: every test already in the archive is taken
 from there instead of being evaluated again, so a resumed run proposes exactly the
 scenes an uninterrupted one would (for a deterministic SUT) and loses nothing.
+
+Nothing is written before every setting has been checked: the search algorithm, the
+run directory (``archive.run_file``) and every component of the pipeline are built or
+validated first, so a typo leaves no half-started run behind.
 """
 from __future__ import annotations
 
@@ -16,22 +20,21 @@ from pathlib import Path
 import numpy as np
 
 from ..archive import Archive, TestRecord
+from ..archive.run_file import ARCHIVE_FILE, RUN_FILE, RunError, check_run_dir, write_run_file
 from ..execution import make_executor
-from ..pipeline import Job, PipelineConfig
+from ..pipeline import Job, PipelineConfig, check_render_settings
 from ..progress import Progress
 from ..space import load_space
 from .algorithms import make_algorithm
 from .diversity import DiversityTracker
+from .error_streak import DEFAULT_LIMIT, SUTErrorsStop, SUTErrorStreak
 
-RUN_FILE = "run.json"
-ARCHIVE_FILE = "archive.sqlite"
+__all__ = ["ARCHIVE_FILE", "RUN_FILE", "RunConfig", "RunError", "RunSummary", "SUTErrorsStop", "run_search"]
 # The fitness the search sees for a test without a verdict (SUT or render error): the
 # best possible answer, so the search never mistakes an error for a failure.
 NO_VERDICT_FITNESS = 1.0
-
-
-class RunError(RuntimeError):
-    """A run directory that cannot be started or resumed as asked."""
+# How the work is spread, or when the run stops: these may change when a run is resumed.
+VOLATILE = ("workers", "cluster", "budget_tests", "budget_s", "stop_after_sut_errors")
 
 
 @dataclass
@@ -44,11 +47,23 @@ class RunConfig:
     budget_s: float | None = None
     workers: int = 1
     cluster: str | None = None
+    stop_after_sut_errors: int = DEFAULT_LIMIT  # SUT errors in a row with no answer between; 0 = never stop
+
+    def check(self) -> None:
+        """The plain values; the components are checked by building them (``make_executor``)."""
+        if self.budget_tests is not None and self.budget_tests < 1:
+            raise ValueError(f"--budget must be at least 1 test, got {self.budget_tests}")
+        if self.budget_s is not None and not self.budget_s > 0:
+            raise ValueError(f"--budget-time must be a positive number of seconds, got {self.budget_s}")
+        if self.workers < 1:
+            raise ValueError(f"--workers must be at least 1, got {self.workers}")
+        if self.stop_after_sut_errors < 0:
+            raise ValueError(f"--stop-after-sut-errors must be 0 (never stop) or more, got {self.stop_after_sut_errors}")
 
     def identity(self) -> dict:
         """What must match for a resume to continue the same search."""
         data = asdict(self)
-        for volatile in ("workers", "cluster", "budget_tests", "budget_s"):
+        for volatile in VOLATILE:
             data.pop(volatile)
         data["pipeline"].pop("run_dir")
         data["pipeline"].pop("render_threads")  # how the work is spread, not what it computes
@@ -64,6 +79,7 @@ class RunSummary:
     errors: int = 0
     generations: int = 0
     stopped_because: str = ""
+    last_sut_error: str | None = None
     population: list = field(default_factory=list)
 
 
@@ -77,41 +93,40 @@ def _versions() -> dict:
     return out
 
 
-def _prepare_run_dir(config: RunConfig, resume: bool) -> Path:
-    run_dir = Path(config.pipeline.run_dir)
-    run_file = run_dir / RUN_FILE
-    space = load_space(config.pipeline.space)
-    if run_file.exists():
-        if not resume:
-            raise RunError(f"{run_dir} already holds a run; pass --resume to continue it or choose another --out")
-        stored = json.loads(run_file.read_text())
-        if stored.get("identity") != config.identity():
-            raise RunError(f"{run_dir} holds a run with a different configuration; resume it with the options in "
-                           f"{run_file}, or start a new run in another directory")
-        if stored.get("space_hash") != space.hash:
-            raise RunError(f"the scene space {config.pipeline.space!r} changed since {run_dir} was started "
-                           f"(hash {stored.get('space_hash')} -> {space.hash}); start a new run")
-        return run_dir
-    if resume and run_dir.exists() and any(run_dir.iterdir()):
-        raise RunError(f"nothing to resume: {run_file} is missing")
-    run_dir.mkdir(parents=True, exist_ok=True)
-    run_file.write_text(json.dumps({
-        "identity": config.identity(), "config": asdict(config), "space_hash": space.hash,
-        "space_source": space.source, "space": space.to_dict(), "versions": _versions(),
-        "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
-    }, indent=2, default=str))
-    return run_dir
-
-
 def run_search(config: RunConfig, resume: bool = False, progress_stream=None) -> RunSummary:
-    run_dir = _prepare_run_dir(config, resume)
+    """Run (or resume) a search; raises RunError (nothing written) for a run that cannot start as
+    asked, and SUTErrorsStop (everything evaluated kept) when the SUT keeps failing."""
+    config.check()
     space = load_space(config.pipeline.space)
-    archive = Archive(run_dir / ARCHIVE_FILE)
+    check_render_settings(config.pipeline, space)   # an unregistered camera, a bad --min-visible
+    run_dir = Path(config.pipeline.run_dir)
     algorithm = make_algorithm(config.algorithm, space, config.pop_size, config.seed)
+    new = check_run_dir(run_dir, config.identity(), space.hash,
+                        {"budget_tests": config.budget_tests, "budget_s": config.budget_s}, resume)
+    executor = make_executor(config.pipeline, config.workers, config.cluster)  # builds (checks) every component
+    try:
+        if new:
+            write_run_file(run_dir, _run_file_content(config, space))
+        summary, streak = _search(config, space, run_dir, algorithm, executor, progress_stream)
+    finally:
+        executor.close()
+    if streak.tripped:
+        raise SUTErrorsStop(streak, summary)
+    return summary
+
+
+def _run_file_content(config: RunConfig, space) -> dict:
+    return {"identity": config.identity(), "config": asdict(config), "space_hash": space.hash,
+            "space_source": space.source, "space": space.to_dict(), "versions": _versions(),
+            "started": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
+
+
+def _search(config, space, run_dir, algorithm, executor, progress_stream):
+    archive = Archive(run_dir / ARCHIVE_FILE)
     diversity = DiversityTracker(space)
-    executor = make_executor(config.pipeline, config.workers, config.cluster)
     progress = Progress(config.budget_tests, stream=progress_stream)
     summary = RunSummary(run_dir)
+    streak = SUTErrorStreak(config.stop_after_sut_errors)
     elapsed_before = float(archive.get_meta("elapsed_s", 0.0))
     session_start = time.monotonic()
     try:
@@ -127,18 +142,20 @@ def run_search(config: RunConfig, resume: bool = False, progress_stream=None) ->
                 summary.stopped_because = "the scene space has no unseen scene left"
                 break
             records = _evaluate_generation(config, generation, scenes, space, diversity, archive, executor,
-                                           progress, summary)
+                                           progress, summary, streak)
+            if streak.tripped:
+                summary.stopped_because = f"{streak.length} SUT errors in a row"
+                break
             algorithm.tell(np.array([_objectives(r) for r in records]), records)
             archive.set_meta("elapsed_s", elapsed_before + time.monotonic() - session_start)
             generation += 1
             summary.generations = generation
     finally:
         archive.set_meta("elapsed_s", elapsed_before + time.monotonic() - session_start)
-        executor.close()
         progress.close()
         archive.close()
     summary.population = getattr(algorithm, "population", [])
-    return summary
+    return summary, streak
 
 
 def _budget_reason(config: RunConfig, tests: int, elapsed: float) -> str:
@@ -149,7 +166,7 @@ def _budget_reason(config: RunConfig, tests: int, elapsed: float) -> str:
     return ""
 
 
-def _evaluate_generation(config, generation, scenes, space, diversity, archive, executor, progress, summary):
+def _evaluate_generation(config, generation, scenes, space, diversity, archive, executor, progress, summary, streak):
     records: list[TestRecord | None] = [None] * len(scenes)
     jobs = []
     for index, scene in enumerate(scenes):
@@ -171,6 +188,9 @@ def _evaluate_generation(config, generation, scenes, space, diversity, archive, 
         records[record.index] = record
         summary.evaluated_now += 1
         _count(summary, progress, record, resumed=False)
+        streak.add(record)
+        if streak.tripped:
+            executor.cancel_pending()  # what is already running still comes back and is kept
     return records
 
 
@@ -178,6 +198,7 @@ def _count(summary: RunSummary, progress: Progress, record: TestRecord, resumed:
     summary.tests += 1
     summary.failures += record.failed
     summary.errors += record.errored
+    summary.last_sut_error = record.sut_error or summary.last_sut_error
     progress.update(failed=record.failed, errored=record.errored, resumed=resumed)
 
 

@@ -27,6 +27,14 @@ class Feature:
     options: tuple[str, ...] = ()
     truth_map: Mapping[str, str] = field(default_factory=dict)
     caption: str = ""
+    label: str = ""               # a short display name for people ("phone on the co-driver seat")
+    describe: Mapping[str, str] = field(default_factory=dict)  # value -> plain text for a lab technician
+    visible_parts: tuple[str, ...] = ()   # render parts that show it (see isu_validate/render/visibility.py)
+    min_visible: float | None = None      # below this visible share it is occluded (None: the default)
+
+    @property
+    def display_name(self) -> str:
+        return self.label or self.name.replace("_", " ")
 
     @property
     def discrete(self) -> bool:
@@ -88,11 +96,16 @@ class Feature:
             out.update(predicted=True, weight=self.weight, question=self.question, options=list(self.options))
             if self.truth_map:
                 out["truth"] = dict(self.truth_map)
+            if self.visible_parts:
+                out["visible_parts"] = list(self.visible_parts)
+            if self.min_visible is not None:
+                out["min_visible"] = self.min_visible
         return out
 
 
 _KNOWN_KEYS = {"type", "values", "low", "high", "unit", "active_when", "predicted", "weight",
-               "question", "options", "truth", "caption", "description"}
+               "question", "options", "truth", "caption", "description", "label", "describe",
+               "visible_parts", "min_visible"}
 
 
 def parse_feature(name: str, raw: Mapping[str, Any], where: str) -> Feature:
@@ -124,11 +137,29 @@ def parse_feature(name: str, raw: Mapping[str, Any], where: str) -> Feature:
         if kind == "integer" and (low != int(low) or high != int(high)):
             raise SpaceError(f"{here}: integer bounds must be whole numbers")
         kwargs.update(low=low, high=high)
+    kwargs.update(_parse_texts(raw, kwargs, here))
     if "active_when" in raw:
         kwargs["active_when"] = parse_condition(raw["active_when"], f"{here} active_when")
     if raw.get("predicted", False):
         kwargs.update(_parse_prediction(raw, kwargs, here))
+    elif "visible_parts" in raw or "min_visible" in raw:
+        raise SpaceError(f"{here}: visible_parts and min_visible belong to predicted features (only they are judged)")
     return Feature(**kwargs)
+
+
+def _parse_texts(raw: Mapping[str, Any], kwargs: dict, here: str) -> dict:
+    """``label`` and ``describe`` are for people (recreation sheets, reports): they never change the hash."""
+    label = raw.get("label", "")
+    if not isinstance(label, str):
+        raise SpaceError(f"{here}: `label` must be a string, got {label!r}")
+    describe = raw.get("describe", {})
+    if not isinstance(describe, Mapping) or not all(isinstance(v, str) for v in describe.values()):
+        raise SpaceError(f"{here}: `describe` must be a table of value = \"text\", got {describe!r}")
+    unknown = [k for k in describe if kwargs.get("values") and k not in kwargs["values"]]
+    if unknown:
+        raise SpaceError(f"{here}: `describe` names {unknown}, which are not values of the feature "
+                         f"(its values: {list(kwargs['values'])})")
+    return {"label": label.strip(), "describe": {str(k): v.strip() for k, v in describe.items()}}
 
 
 def _parse_prediction(raw: Mapping[str, Any], kwargs: dict, here: str) -> dict:
@@ -150,4 +181,18 @@ def _parse_prediction(raw: Mapping[str, Any], kwargs: dict, here: str) -> dict:
         if answer not in options:
             raise SpaceError(f"{here}: value {value!r} has the answer {answer!r}, which is not among the options {list(options)}")
     return {"predicted": True, "weight": float(weight), "question": question.strip(),
-            "options": options, "truth_map": truth_map}
+            "options": options, "truth_map": truth_map, **_parse_visibility(raw, here)}
+
+
+def _parse_visibility(raw: Mapping[str, Any], here: str) -> dict:
+    parts = raw.get("visible_parts", [])
+    if not isinstance(parts, list) or not all(isinstance(p, str) and p.strip() for p in parts):
+        raise SpaceError(f"{here}: visible_parts must list render part names, e.g. [\"driver_face\"]")
+    share = raw.get("min_visible")
+    if share is not None:
+        if isinstance(share, bool) or not isinstance(share, (int, float)) or not 0.0 <= share <= 1.0:
+            raise SpaceError(f"{here}: min_visible must be a share in [0, 1], got {share!r}")
+        if not parts:
+            raise SpaceError(f"{here}: min_visible needs visible_parts (the parts whose visible share it bounds)")
+        share = float(share)
+    return {"visible_parts": tuple(p.strip() for p in parts), "min_visible": share}

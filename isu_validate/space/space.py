@@ -109,6 +109,9 @@ class SceneSpace:
 
     def check(self, scene: Mapping[str, Any]) -> Scene:
         """Raise SpaceError naming every problem; return the canonical scene."""
+        if not isinstance(scene, Mapping):  # e.g. a JSON file holding a list of scenes
+            raise SpaceError(f"a scene is a JSON object {{feature: value, ...}} for space {self.name!r}, "
+                             f"not a {type(scene).__name__}; write one scene per file")
         problems = self.violations(scene)
         if problems:
             raise SpaceError(f"invalid scene for space {self.name!r}: " + "; ".join(problems))

@@ -1,6 +1,6 @@
 """``--sut SPEC`` -> a SUT: the spec's scheme picks the adapter.
 
-Specs (a contract, see ARCHITECTURE.md): ``reference``, ``openai:MODEL@BASE_URL``,
+Specs (a contract, see docs/ARCHITECTURE.md): ``reference``, ``openai:MODEL@BASE_URL``,
 ``command:PROGRAM ARGS...``, ``http:URL``; and for benchmarking searches ``bench:NAME``
 (a SUT with planted blind spots that answers from the run's scene labels).  Plugging in a new kind of SUT is one
 line in ``ADAPTERS`` (or ``register_adapter`` at import time).

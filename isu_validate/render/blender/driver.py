@@ -95,7 +95,7 @@ def two_bone_ik(root: Vector, target: Vector, l1: float, l2: float, pole: Vector
 class Driver:
     def __init__(self, rig: dict, coll):
         self.rig, self.coll = rig, coll
-        pid = INSTANCE_ID["driver"]
+        pid, face = INSTANCE_ID["driver"], INSTANCE_ID["driver_face"]   # the head is its own part
         self.skin = M.material("skin", SKIN, roughness=0.55, specular=0.35)
         self.shirt = M.material("shirt", SHIRT["WHITE"], roughness=0.85, specular=0.2)
         self.hair_mat = M.material("hair", HAIR, roughness=0.6)
@@ -109,14 +109,14 @@ class Driver:
         o["torso"].pass_index = pid
         coll.objects.link(o["torso"])
         o["neck"] = M.new_object("neck", M.unit_cylinder(), self.skin, coll, pid)
-        o["head"] = M.ellipsoid("head", (0, 0, 0), (1, 1, 1), self.skin, coll, pid)
-        o["nose"] = M.ellipsoid("nose", (0, 0, 0), (0.018, 0.014, 0.022), self.skin, coll, pid)
+        o["head"] = M.ellipsoid("head", (0, 0, 0), (1, 1, 1), self.skin, coll, face)
+        o["nose"] = M.ellipsoid("nose", (0, 0, 0), (0.018, 0.014, 0.022), self.skin, coll, face)
         for side in (1, -1):
-            o[f"eye{side}"] = M.ellipsoid(f"eye{side}", (0, 0, 0), (0.008, 0.013, 0.008), white, coll, pid)
-            o[f"pupil{side}"] = M.ellipsoid(f"pupil{side}", (0, 0, 0), (0.005, 0.0065, 0.0065), dark, coll, pid)
-            o[f"brow{side}"] = M.box(f"brow{side}", (0, 0, 0), (0.008, 0.03, 0.007), self.hair_mat, coll, pid)
-            o[f"ear{side}"] = M.ellipsoid(f"ear{side}", (0, 0, 0), (0.012, 0.008, 0.028), self.skin, coll, pid)
-            o[f"cheek{side}"] = M.ellipsoid(f"cheek{side}", (0, 0, 0), (0.014, 0.02, 0.014), self.skin, coll, pid)
+            o[f"eye{side}"] = M.ellipsoid(f"eye{side}", (0, 0, 0), (0.008, 0.013, 0.008), white, coll, face)
+            o[f"pupil{side}"] = M.ellipsoid(f"pupil{side}", (0, 0, 0), (0.005, 0.0065, 0.0065), dark, coll, face)
+            o[f"brow{side}"] = M.box(f"brow{side}", (0, 0, 0), (0.008, 0.03, 0.007), self.hair_mat, coll, face)
+            o[f"ear{side}"] = M.ellipsoid(f"ear{side}", (0, 0, 0), (0.012, 0.008, 0.028), self.skin, coll, face)
+            o[f"cheek{side}"] = M.ellipsoid(f"cheek{side}", (0, 0, 0), (0.014, 0.02, 0.014), self.skin, coll, face)
             o[f"sleeve{side}"] = M.new_object(f"sleeve{side}", M.unit_cylinder(), self.shirt, coll, pid)
             o[f"shoulder{side}"] = M.ellipsoid(f"shoulder{side}", (0, 0, 0), (1, 1, 1), self.shirt, coll, pid)
             o[f"upper{side}"] = M.new_object(f"upper{side}", M.unit_cylinder(), self.skin, coll, pid)
@@ -125,11 +125,11 @@ class Driver:
             o[f"hand{side}"] = M.new_object(f"hand{side}", M.unit_sphere(), self.skin, coll, pid)
             o[f"thigh{side}"] = M.new_object(f"thigh{side}", M.unit_sphere(), trousers, coll, pid)
             o[f"shin{side}"] = M.new_object(f"shin{side}", M.unit_cylinder(), trousers, coll, pid)
-            o[f"strand{side}"] = M.ellipsoid(f"strand{side}", (0, 0, 0), (1, 1, 1), self.hair_mat, coll, pid)
-        o["mouth"] = M.new_object("mouth", _mouth_mesh(), self.lips, coll, pid)
-        o["teeth"] = M.box("teeth", (0, 0, 0), (0.006, 0.044, 0.007), white, coll, pid)
-        o["hair_cap"] = M.ellipsoid("hair_cap", (0, 0, 0), (1, 1, 1), self.hair_mat, coll, pid)
-        o["hair_long"] = M.ellipsoid("hair_long", (0, 0, 0), (1, 1, 1), self.hair_mat, coll, pid)
+            o[f"strand{side}"] = M.ellipsoid(f"strand{side}", (0, 0, 0), (1, 1, 1), self.hair_mat, coll, face)
+        o["mouth"] = M.new_object("mouth", _mouth_mesh(), self.lips, coll, face)
+        o["teeth"] = M.box("teeth", (0, 0, 0), (0.006, 0.044, 0.007), white, coll, face)
+        o["hair_cap"] = M.ellipsoid("hair_cap", (0, 0, 0), (1, 1, 1), self.hair_mat, coll, face)
+        o["hair_long"] = M.ellipsoid("hair_long", (0, 0, 0), (1, 1, 1), self.hair_mat, coll, face)
         self.objects = o
         self.belt = _Belt(rig["seat_belt"], coll)
         self.state: dict = {}

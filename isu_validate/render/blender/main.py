@@ -56,6 +56,10 @@ def _render(studio, request: dict) -> dict:
     update_s = time.perf_counter() - t
     print(f"[isu] render {request.get('tag', '')}", flush=True)
     times = studio.render(request["exr"])
+    if request.get("footprints"):   # the parts' unoccluded footprints, for per-feature visibility
+        from .parts import write_footprints
+        times.update(write_footprints(studio.scene, request["footprints"], request["camera"],
+                                      request["footprint_file"]))
     # CPU seconds of all render threads: a contention-free measure of the work a frame takes
     return {"update_s": update_s, **times, "cpu_s": time.process_time() - cpu}
 

@@ -1,10 +1,12 @@
-"""``command:PROGRAM ARGS...``: the command protocol of ARCHITECTURE.md.
+"""``command:PROGRAM ARGS...``: the command protocol of docs/ARCHITECTURE.md.
 
 The program receives one JSON object on stdin,
 ``{"mode": "vqa", "image": PATH, "prompt": TEXT, "questions": [{"key", "question", "options"}]}``
 or ``{"mode": "vc", "image": PATH, "prompt": TEXT}``, and prints ``{"answers": {K: OPTION}}``
 or ``{"caption": TEXT}`` on stdout.  A non-zero exit, a timeout or unparseable output is
 a SUT error.  One process per request: the program may keep its own state elsewhere.
+Each request runs in its own process group (session), so a timeout kills the program
+and everything it started (a shell script's children would otherwise live on).
 
 Options: ``cwd`` (working directory for the program).
 """
@@ -14,6 +16,7 @@ import json
 import os
 import shlex
 import shutil
+import signal
 import subprocess
 import time
 from pathlib import Path
@@ -59,27 +62,51 @@ class CommandAdapter:
     def send(self, request: SUTRequest) -> Exchange:
         start = time.perf_counter()
         try:
-            proc = subprocess.run(self.argv, input=json.dumps(self.message(request)), capture_output=True,
-                                  text=True, timeout=self.timeout_s, cwd=self.cwd)
+            returncode, stdout, stderr = self._run(json.dumps(self.message(request)))
         except subprocess.TimeoutExpired:
             return Exchange(error=f"timed out after {self.timeout_s:g} s: {self.id}",
                             latency_s=time.perf_counter() - start)
         except OSError as exc:
             return Exchange(error=f"cannot start {self.id}: {exc}", latency_s=time.perf_counter() - start)
         latency = time.perf_counter() - start
-        stdout = self.redact(proc.stdout)
-        if proc.returncode != 0:
-            tail = self.redact(proc.stderr.strip())[-_STDERR_SHOWN:]
-            return Exchange(raw=stdout, error=f"exited with status {proc.returncode}: {json.dumps(tail)}",
-                            latency_s=latency, meta={"returncode": proc.returncode})
+        stdout = self.redact(stdout)
+        if returncode != 0:
+            tail = self.redact(stderr.strip())[-_STDERR_SHOWN:]
+            return Exchange(raw=stdout, error=f"exited with status {returncode}: {json.dumps(tail)}",
+                            latency_s=latency, meta={"returncode": returncode})
         try:
             content: Any = json.loads(stdout)
         except ValueError:
             content = stdout  # the tolerant parser decides whether anything usable is in there
         return Exchange(raw=stdout, content=content, latency_s=latency, meta={"returncode": 0})
 
+    def _run(self, message: str) -> tuple[int, str, str]:
+        """The program's exit status, stdout and stderr.  On a timeout (TimeoutExpired) or any other
+        way out of here (Ctrl-C) the program's whole process group is killed first."""
+        proc = subprocess.Popen(self.argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                text=True, cwd=self.cwd, start_new_session=True)
+        try:
+            stdout, stderr = proc.communicate(message, timeout=self.timeout_s)
+        except BaseException:
+            _kill_group(proc)
+            raise
+        return proc.returncode, stdout, stderr
+
     def close(self) -> None:
         pass
+
+
+def _kill_group(proc: subprocess.Popen) -> None:
+    """Kill the program and every process of its group, reap it, and drop the pipes (without
+    reading them: a process that left the group could hold them open for ever)."""
+    try:
+        os.killpg(proc.pid, signal.SIGKILL)
+    except (ProcessLookupError, PermissionError):
+        pass  # the group is gone already
+    proc.wait()
+    for stream in (proc.stdin, proc.stdout, proc.stderr):
+        if stream:
+            stream.close()
 
 
 def open_command(target: str, **kwargs: Any) -> CommandAdapter:

@@ -1,0 +1,151 @@
+"""``exposure check``: how close renders and captures of the same scenes are in brightness and colour.
+
+Pairs are matched by file stem (``SIM_DIR/x.png`` with ``REAL_DIR/x.png``), or come from a pairs
+directory (``isu_validate.pairs``: each sample's ``sim.png`` with each of its ``real/`` frames). Per pair: the mean,
+median and 5th/95th percentile of display luma (BT.709 weights on the 8-bit levels), their ratio, and
+the CIE dE2000 between the two images' mean colours; pooled and per-pair luma histograms; an HTML page."""
+from __future__ import annotations
+
+import base64
+import html
+import io
+import json
+from pathlib import Path
+
+import numpy as np
+
+from .colour_align import read_rgb8
+from .frames import IMAGE_SUFFIXES
+from .metering import LUMA
+
+BINS = 64
+
+
+def pairs(sim_dir: str | Path, real_dir: str | Path) -> tuple[list[tuple[Path, Path]], list[str]]:
+    sim = {p.stem: p for p in sorted(Path(sim_dir).iterdir()) if p.suffix.lower() in IMAGE_SUFFIXES
+           and not p.name.startswith(".") and "." not in p.stem}
+    real = {p.stem: p for p in sorted(Path(real_dir).iterdir()) if p.suffix.lower() in IMAGE_SUFFIXES
+            and not p.name.startswith(".")}
+    matched = [(sim[k], real[k]) for k in sorted(sim) if k in real]
+    unmatched = [str(sim[k]) for k in sorted(sim) if k not in real] + [str(real[k]) for k in sorted(real) if k not in sim]
+    if not matched:
+        raise ValueError(f"no image in {sim_dir} has a namesake in {real_dir}; pairs are matched by file name "
+                         "(sim/x.png with real/x.png)")
+    return matched, unmatched
+
+
+def pairs_of_directory(root: str | Path) -> tuple[list[tuple[Path, Path]], list[str]]:
+    """(sim.png, real frame) of every sample of a pairs directory; samples without frames are listed."""
+    from isu_validate.pairs import PairsDir
+    matched, unmatched = [], []
+    for sample in PairsDir(root).samples():
+        frames = sample.real_frames()
+        if not sample.sim.is_file() or not frames:
+            unmatched.append(str(sample.path))
+        matched += [(sample.sim, frame) for frame in frames if sample.sim.is_file()]
+    if not matched:
+        raise ValueError(f"no sample of {root} has both sim.png and captured frames in real/ (capture them with "
+                         "`isu-validate capture shoot --pair DIR/<sample>`)")
+    return matched, unmatched
+
+
+def measure(image: np.ndarray) -> dict:
+    luma = (image.astype(np.float64) / 255.0) @ LUMA
+    return {"mean": float(luma.mean()), "median": float(np.median(luma)), "p5": float(np.percentile(luma, 5)),
+            "p95": float(np.percentile(luma, 95)), "histogram": np.histogram(luma, BINS, (0, 1))[0].tolist(),
+            "mean_colour": (image.reshape(-1, 3).mean(axis=0) / 255.0).tolist()}
+
+
+def compare(sim_dir: str | Path, real_dir: str | Path | None = None) -> dict:
+    """Per-pair and pooled brightness and colour; ``real_dir`` None: ``sim_dir`` is a pairs directory."""
+    from .colour_fit import de2000
+    matched, unmatched = pairs(sim_dir, real_dir) if real_dir is not None else pairs_of_directory(sim_dir)
+    rows = []
+    for sim_path, real_path in matched:
+        s, r = measure(read_rgb8(sim_path)), measure(read_rgb8(real_path))
+        name = sim_path.stem if real_dir is not None else f"{sim_path.parent.name}/{real_path.stem}"
+        rows.append({"name": name, "sim": str(sim_path), "real": str(real_path), "sim_luma": s, "real_luma": r,
+                     "luma_ratio": r["mean"] / s["mean"] if s["mean"] > 0 else float("inf"),
+                     "luma_difference": r["mean"] - s["mean"],
+                     "de2000_mean_colour": float(de2000(np.array([s["mean_colour"]]), np.array([r["mean_colour"]]))[0])})
+    diffs = np.array([row["luma_difference"] for row in rows])
+    des = np.array([row["de2000_mean_colour"] for row in rows])
+    summary = {"pairs": len(rows), "unmatched": unmatched, "mean_abs_luma_difference": float(np.abs(diffs).mean()),
+               "mean_luma_difference": float(diffs.mean()), "mean_de2000_mean_colour": float(des.mean()),
+               "max_de2000_mean_colour": float(des.max())}
+    return {"summary": summary, "pairs": rows}
+
+
+def _png(fig) -> str:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=80)
+    return base64.b64encode(buf.getvalue()).decode()
+
+
+def plots(result: dict) -> list[tuple[str, str]]:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows, edges = result["pairs"], np.linspace(0, 1, BINS + 1)
+    out = []
+    fig, ax = plt.subplots(1, 2, figsize=(10, 3.8))
+    for key, label in (("sim_luma", "renders"), ("real_luma", "captures")):
+        pooled = np.sum([r[key]["histogram"] for r in rows], axis=0)
+        ax[0].stairs(pooled / pooled.sum(), edges, label=label)
+    ax[0].set_xlabel("luma")
+    ax[0].set_title("brightness histogram, all pairs")
+    ax[0].legend()
+    s, r = [x["sim_luma"]["mean"] for x in rows], [x["real_luma"]["mean"] for x in rows]
+    ax[1].plot(s, r, "o")
+    ax[1].plot([0, 1], [0, 1], "k--", lw=1)
+    ax[1].set_xlabel("render mean luma")
+    ax[1].set_ylabel("capture mean luma")
+    ax[1].set_title("per pair")
+    fig.tight_layout()
+    out.append(("Brightness", _png(fig)))
+    plt.close(fig)
+    n = min(len(rows), 12)
+    cols = min(n, 4)
+    fig, axes = plt.subplots((n + cols - 1) // cols, cols, figsize=(3 * cols, 2.3 * ((n + cols - 1) // cols)), squeeze=False)
+    for ax, row in zip(axes.ravel(), rows[:n]):
+        for key, label in (("sim_luma", "render"), ("real_luma", "capture")):
+            h = np.asarray(row[key]["histogram"], float)
+            ax.stairs(h / max(h.sum(), 1), edges, label=label)
+        ax.set_title(row["name"][:28], fontsize=8)
+    for ax in axes.ravel()[n:]:
+        ax.axis("off")
+    axes[0][0].legend(fontsize=7)
+    fig.tight_layout()
+    out.append((f"Histograms per pair (first {n})", _png(fig)))
+    plt.close(fig)
+    return out
+
+
+def write_html(result: dict, path: str | Path) -> Path:
+    s = result["summary"]
+    e = html.escape
+    rows = "".join(
+        f"<tr><td>{e(r['name'])}</td><td>{r['sim_luma']['mean']:.3f}</td><td>{r['real_luma']['mean']:.3f}</td>"
+        f"<td>{r['luma_ratio']:.3f}</td><td>{r['de2000_mean_colour']:.2f}</td></tr>" for r in result["pairs"])
+    figures = "".join(f"<h2>{e(title)}</h2><img src='data:image/png;base64,{data}'>" for title, data in plots(result))
+    unmatched = "".join(f"<li>{e(u)}</li>" for u in s["unmatched"])
+    page = (f"<!doctype html><html><head><meta charset='utf-8'><title>exposure check</title>"
+            "<style>body{font-family:sans-serif;margin:2em}td,th{padding:2px 10px;text-align:right}"
+            "td:first-child{text-align:left}</style></head><body>"
+            f"<h1>Renders against captures</h1><p>{s['pairs']} pairs; mean |luma difference| "
+            f"{s['mean_abs_luma_difference']:.3f} (capture - render {s['mean_luma_difference']:+.3f}); dE2000 of the mean "
+            f"colours: mean {s['mean_de2000_mean_colour']:.2f}, max {s['max_de2000_mean_colour']:.2f}</p>{figures}"
+            "<h2>Pairs</h2><table><tr><th>pair</th><th>render luma</th><th>capture luma</th><th>ratio</th>"
+            f"<th>dE2000 mean colour</th></tr>{rows}</table>"
+            + (f"<h2>Unmatched files</h2><ul>{unmatched}</ul>" if unmatched else "") + "</body></html>")
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(page)
+    return path
+
+
+def write_json(result: dict, path: str | Path) -> Path:
+    path = Path(path)
+    path.write_text(json.dumps(result, indent=1))
+    return path

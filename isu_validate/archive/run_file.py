@@ -1,0 +1,106 @@
+"""``run.json``: what a run directory measures, written once before its first test.
+
+A run directory is started or resumed here and nowhere else.  Starting refuses a
+directory that already holds a run; resuming refuses any setting that changes what
+is measured (the differences are listed, so the user sees that a different ``--sut``
+or ``--seed`` was not silently ignored), a scene space that changed since the start,
+and a budget smaller than the stored one (a budget may only grow).
+"""
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+RUN_FILE = "run.json"
+ARCHIVE_FILE = "archive.sqlite"
+# budgets that may only grow on --resume: RunConfig field -> what the user calls it
+GROWING_BUDGETS = {"budget_tests": "test budget", "budget_s": "time budget"}
+
+
+class RunError(RuntimeError):
+    """A run directory that cannot be started or resumed as asked; the message names the fix."""
+
+
+@dataclass(frozen=True)
+class Difference:
+    setting: str     # e.g. "seed" or "pipeline.sut"
+    stored: Any
+    now: Any
+
+    def __str__(self) -> str:
+        return f"{self.setting}: {self.stored!r} in the stored run, {self.now!r} now"
+
+
+class ResumeMismatch(RunError):
+    """Resuming with settings that change what the run measures."""
+
+    def __init__(self, run_dir: Path, differences: list[Difference]):
+        self.run_dir, self.differences = run_dir, differences
+        listed = "; ".join(str(d) for d in differences)
+        super().__init__(f"{run_dir} holds a run with a different configuration ({listed}); resume it without "
+                         f"these options (the stored ones are used) or start a new run with another --out")
+
+
+def read_run_file(run_dir: str | os.PathLike) -> dict:
+    path = Path(run_dir) / RUN_FILE
+    try:
+        return json.loads(path.read_text())
+    except ValueError as exc:
+        raise RunError(f"{path} is not valid JSON ({exc}); the run cannot be resumed: start a new one") from None
+
+
+def write_run_file(run_dir: str | os.PathLike, content: dict) -> Path:
+    """Atomically: a killed start leaves either no run.json or a whole one."""
+    run_dir = Path(run_dir)
+    run_dir.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=run_dir, prefix=".run-", suffix=".json")
+    with os.fdopen(fd, "w") as fh:
+        json.dump(content, fh, indent=2, default=str)
+    os.replace(tmp, run_dir / RUN_FILE)
+    return run_dir / RUN_FILE
+
+
+def check_run_dir(run_dir: str | os.PathLike, identity: dict, space_hash: str, budgets: dict,
+                  resume: bool) -> bool:
+    """Whether ``run_dir`` starts a new run (True) or resumes the stored one (False); raises
+    RunError when neither is possible as asked.  Writes nothing."""
+    run_dir = Path(run_dir)
+    if not (run_dir / RUN_FILE).exists():
+        if resume and run_dir.exists() and any(run_dir.iterdir()):
+            raise RunError(f"nothing to resume: {run_dir / RUN_FILE} is missing")
+        return True
+    if not resume:
+        raise RunError(f"{run_dir} already holds a run; pass --resume to continue it or choose another --out")
+    stored = read_run_file(run_dir)
+    differences = differences_between(stored.get("identity", {}), identity)
+    if differences:
+        raise ResumeMismatch(run_dir, differences)
+    if stored.get("space_hash") != space_hash:
+        raise RunError(f"the scene space changed since {run_dir} was started (hash {stored.get('space_hash')} -> "
+                          f"{space_hash}); start a new run")
+    _check_budgets(run_dir, stored.get("config", {}), budgets)
+    return False
+
+
+def differences_between(stored: dict, now: dict, prefix: str = "") -> list[Difference]:
+    """Every setting (nested dicts flattened to dotted names) whose value differs."""
+    out = []
+    for key in sorted(set(stored) | set(now)):
+        a, b = stored.get(key), now.get(key)
+        if isinstance(a, dict) and isinstance(b, dict) and key != "sut_options":
+            out += differences_between(a, b, f"{prefix}{key}.")
+        elif a != b:
+            out.append(Difference(prefix + key, a, b))
+    return out
+
+
+def _check_budgets(run_dir: Path, stored: dict, budgets: dict) -> None:
+    for field, name in GROWING_BUDGETS.items():
+        before, now = stored.get(field), budgets.get(field)
+        if before is not None and now is not None and now < before:
+            raise RunError(f"{run_dir} was started with a {name} of {before:g}; a resumed run's budget may "
+                              f"only grow, not shrink to {now:g}")
