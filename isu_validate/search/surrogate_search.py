@@ -31,7 +31,11 @@ from .surrogate import ErrorModel, record_targets
 POOL_PER_SLOT, POOL_MAX = 16, 240       # candidates screened per scene tested, and at most per generation
 POOL_SHARES = (0.4, 0.3, 0.3)           # bred (crossover), local (mutation only), random
 LOCAL_MUTATIONS = 1.5                   # features a local move changes on average
-TOP_SHARE = 0.3                         # a slot picks the most novel of this share of the pool, best first
+# A slot picks the most novel of this share of the pool's best under its draw.  Measured with bench
+# effectiveness (10 seeds, 150 tests): 0.5 or more halves the strict-threshold ratio to random search;
+# a share growing over the slots (0.2..0.45, 0.15..0.6) traded ratio for entropy without meeting the
+# entropy goal on more benchmark SUTs than 0.3 does.
+TOP_SHARE = 0.3
 NOVELTY_REFERENCE = 500                 # failing tests the novelty is measured against (most recent)
 
 
