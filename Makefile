@@ -22,10 +22,10 @@ $(STAMP): pyproject.toml scripts/setup_system.sh scripts/find_python313.sh
 	$(PY) -m isu_validate.setup_data
 	@touch $(STAMP)
 
-# a small NSGA-II search against the embedded reference SUT at the draft preset, seed fixed
+# a small search (the default, surrogate-assisted algorithm) against the embedded reference SUT at the draft preset, seed fixed
 DEMO_DIR ?= runs/demo-$(shell date +%Y%m%d-%H%M%S)
 demo: $(STAMP)
-	$(VENV)/bin/isu-validate run --sut reference --algorithm nsga2 --budget 30 --pop-size 10 --seed 1 \
+	$(VENV)/bin/isu-validate run --sut reference --budget 30 --pop-size 10 --seed 1 \
 		--preset draft --out $(DEMO_DIR)
 
 test: $(STAMP)

@@ -93,7 +93,7 @@ def test_nsga2_receives_fitness_and_minus_novelty_from_the_run_loop(tmp_path, mo
     def recording(name, space, pop_size, seed):
         algorithm = real_make_algorithm(name, space, pop_size, seed)
         tell = algorithm.tell
-        algorithm.tell = lambda F: told.append(np.array(F, dtype=float)) or tell(F)
+        algorithm.tell = lambda F, *records: told.append(np.array(F, dtype=float)) or tell(F, *records)
         return algorithm
 
     real_make_algorithm = loop.make_algorithm

@@ -12,6 +12,7 @@ BENCH_MODULES = [
     "isu_validate.render.bench_faces",   # bench faces
     "capture.bench",          # bench calib
     "isu_validate.search.bench",
+    "isu_validate.search.effectiveness.bench",  # bench effectiveness
     "isu_validate.evaluate.bench",
     "isu_validate.realism.bench",  # bench fid
     "style_transfer.bench",        # bench nst

@@ -73,7 +73,8 @@ def add_run_options(p) -> None:
                                  "API keys: see below)")
     p.add_argument("--mode", choices=["vqa", "vc"], help=f"visual question answering or captioning (default {d.mode})")
     p.add_argument("--space", help=f"scene space: shipped name or TOML path (default {d.space})")
-    p.add_argument("--algorithm", choices=ALGORITHMS, help=f"search algorithm (default {r.algorithm})")
+    p.add_argument("--algorithm", choices=ALGORITHMS, help=f"search algorithm (default {r.algorithm}): surrogate (surrogate-assisted, learns "
+                        "where the SUT errs), nsga2 (the paper's NSGA-II, for replication), rs (random search, the baseline)")
     p.add_argument("--pop-size", type=int, help=f"population size (default {r.pop_size})")
     p.add_argument("--budget", type=int, help=f"number of tests (default {DEFAULT_BUDGET}; with --resume: extend the budget)")
     p.add_argument("--budget-time", type=float, help="wall-clock budget in seconds (instead of, or with, --budget)")

@@ -19,7 +19,7 @@ from ..space import SceneSpace
 from .operators import CanonicalDuplicateElimination, SceneRepair, SceneSampling
 from .problem import SceneProblem
 
-ALGORITHMS = ("nsga2", "rs")
+ALGORITHMS = ("surrogate", "nsga2", "rs")
 _TOP_UP_TRIES = 200
 
 
@@ -48,7 +48,9 @@ class SearchAlgorithm:
     def ask(self, n_max: int) -> list[dict]:
         raise NotImplementedError
 
-    def tell(self, F: np.ndarray) -> None:
+    def tell(self, F: np.ndarray, records: list | None = None) -> None:
+        """Objectives of the scenes last asked (rows in their order); ``records`` are their
+        archive records (answers, per-feature verdicts) for algorithms that learn from them."""
         raise NotImplementedError
 
 
@@ -65,7 +67,7 @@ class RandomSearch(SearchAlgorithm):
         self.seen.update(self.space.key(s) for s in scenes)
         return scenes
 
-    def tell(self, F: np.ndarray) -> None:
+    def tell(self, F: np.ndarray, records: list | None = None) -> None:
         pass  # random search learns nothing
 
 
@@ -73,12 +75,15 @@ class NSGA2Search(SearchAlgorithm):
     """pymoo's NSGA-II with per-type crossover/mutation, repair and canonical duplicate elimination."""
     name = "nsga2"
 
-    def __init__(self, space, pop_size, seed):
+    def __init__(self, space, pop_size, seed, mutation: dict | None = None):
+        """``mutation``: pymoo mutation operators per variable type instead of pymoo's defaults
+        (for diagnosing operator rates; ``nsga2`` itself always uses the defaults)."""
         super().__init__(space, pop_size, seed)
         self.problem = SceneProblem(space)
+        self.topped_up = 0  # scenes of the last ask that were random, because pymoo ran short
         repair = SceneRepair()
         dedup = CanonicalDuplicateElimination(self.problem, self.seen)
-        mating = MixedVariableMating(selection=TournamentSelection(func_comp=binary_tournament),
+        mating = MixedVariableMating(selection=TournamentSelection(func_comp=binary_tournament), mutation=mutation,
                                      repair=repair, eliminate_duplicates=dedup)
         self.algorithm = NSGA2(pop_size=pop_size, sampling=SceneSampling(), mating=mating,
                                repair=repair, eliminate_duplicates=dedup)
@@ -94,12 +99,14 @@ class NSGA2Search(SearchAlgorithm):
         scenes = [self.problem.to_scene(ind.X) for ind in offspring][:target]
         taken = {self.space.key(s) for s in scenes}
         # duplicate elimination may leave pymoo short of offspring: resample fresh scenes
-        scenes += self._fresh(target - len(scenes), self.algorithm.random_state, taken)
+        fresh = self._fresh(target - len(scenes), self.algorithm.random_state, taken)
+        self.topped_up = len(fresh)
+        scenes += fresh
         self.seen.update(taken)
         self._pending = Population.new(X=np.array([self.problem.to_x(s) for s in scenes], dtype=object))
         return scenes
 
-    def tell(self, F: np.ndarray) -> None:
+    def tell(self, F: np.ndarray, records: list | None = None) -> None:
         pending, self._pending = self._pending, None
         if pending is None or len(pending) == 0:
             return
@@ -113,7 +120,9 @@ class NSGA2Search(SearchAlgorithm):
 
 
 def make_algorithm(name: str, space: SceneSpace, pop_size: int, seed: int) -> SearchAlgorithm:
-    classes = {"nsga2": NSGA2Search, "rs": RandomSearch}
+    from .surrogate_search import SurrogateSearch
+
+    classes = {"surrogate": SurrogateSearch, "nsga2": NSGA2Search, "rs": RandomSearch}
     if name not in classes:
         raise ValueError(f"unknown algorithm {name!r}; use one of {', '.join(ALGORITHMS)}")
     return classes[name](space, pop_size, seed)

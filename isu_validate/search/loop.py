@@ -40,7 +40,7 @@ VOLATILE = ("workers", "cluster", "budget_tests", "budget_s", "stop_after_sut_er
 @dataclass
 class RunConfig:
     pipeline: PipelineConfig
-    algorithm: str = "nsga2"
+    algorithm: str = "surrogate"
     pop_size: int = 10
     seed: int = 1
     budget_tests: int | None = 40
@@ -146,7 +146,7 @@ def _search(config, space, run_dir, algorithm, executor, progress_stream):
             if streak.tripped:
                 summary.stopped_because = f"{streak.length} SUT errors in a row"
                 break
-            algorithm.tell(np.array([_objectives(r) for r in records]))
+            algorithm.tell(np.array([_objectives(r) for r in records]), records)
             archive.set_meta("elapsed_s", elapsed_before + time.monotonic() - session_start)
             generation += 1
             summary.generations = generation

@@ -1,7 +1,8 @@
 """``--sut SPEC`` -> a SUT: the spec's scheme picks the adapter.
 
 Specs (a contract, see docs/ARCHITECTURE.md): ``reference``, ``openai:MODEL@BASE_URL``,
-``command:PROGRAM ARGS...``, ``http:URL``.  Plugging in a new kind of SUT is one
+``command:PROGRAM ARGS...``, ``http:URL``; and for benchmarking searches ``bench:NAME``
+(a SUT with planted blind spots that answers from the run's scene labels).  Plugging in a new kind of SUT is one
 line in ``ADAPTERS`` (or ``register_adapter`` at import time).
 """
 from __future__ import annotations
@@ -10,6 +11,7 @@ import os
 from typing import Any, Callable
 
 from ..space import SceneSpace
+from .adapters.benchmark import open_benchmark
 from .adapters.command import open_command
 from .adapters.http_json import open_http
 from .adapters.openai_chat import open_openai
@@ -24,11 +26,12 @@ ADAPTERS: dict[str, Callable[..., Any]] = {
     "openai": open_openai,
     "command": open_command,
     "http": open_http,
+    "bench": open_benchmark,
 }
 USAGE = {"reference": "reference", "openai": "openai:MODEL@BASE_URL", "command": "command:PROGRAM ARGS...",
-         "http": "http:URL"}
+         "http": "http:URL", "bench": "bench:NAME"}
 # Factories that want the scene space (the reference ISU's heads are per feature).
-NEEDS_SPACE = {"reference"}
+NEEDS_SPACE = {"reference", "bench"}
 
 
 def register_adapter(scheme: str, factory: Callable[..., Any], *, needs_space: bool = False) -> None:

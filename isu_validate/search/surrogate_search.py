@@ -1,0 +1,149 @@
+"""Surrogate-assisted search: many candidate scenes bred cheaply, the surrogate picks which to test.
+
+Each generation (after a first one of random scenes):
+
+1. the surrogate (``ErrorModel``: per-feature error trees learnt from every test so far)
+   ranks the tested scenes by their expected fitness, which discounts the SUT's random
+   errors; the best of them are the parents (archive elitism);
+2. pymoo's operators breed a pool of candidates many times larger than a generation:
+   crossover + mutation of parent pairs, mutation alone (failure-seeded local search),
+   and fresh random scenes (exploration); every one valid, none tested before;
+3. each slot of the generation draws the surrogate once from its posterior (batch
+   Thompson sampling) and, among the candidates with the lowest fitness under that
+   draw, takes the one farthest from every failure found so far and every candidate
+   chosen before it.  Confident weaknesses are exploited, uncertain regions still get
+   tried, and the failures spread over the space instead of piling onto one region
+   (the RQ2 entropy of failure clusters) without a diversity objective that would
+   compete with the fitness for selection.
+
+Rendering a scene costs seconds and a real VLM call money; screening a candidate costs
+microseconds.  Randomness flows from the seed only (one numpy Generator), so a resumed
+run that replays the archive proposes the same scenes.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .algorithms import SearchAlgorithm
+from .breeding import Breeder
+from .surrogate import ErrorModel, record_targets
+
+POOL_PER_SLOT, POOL_MAX = 16, 240       # candidates screened per scene tested, and at most per generation
+POOL_SHARES = (0.4, 0.3, 0.3)           # bred (crossover), local (mutation only), random
+LOCAL_MUTATIONS = 1.5                   # features a local move changes on average
+# A slot picks the most novel of this share of the pool's best under its draw.  Measured with bench
+# effectiveness (10 seeds, 150 tests): 0.5 or more halves the strict-threshold ratio to random search;
+# a share growing over the slots (0.2..0.45, 0.15..0.6) traded ratio for entropy without meeting the
+# entropy goal on more benchmark SUTs than 0.3 does.
+TOP_SHARE = 0.3
+NOVELTY_REFERENCE = 500                 # failing tests the novelty is measured against (most recent)
+
+
+class SurrogateSearch(SearchAlgorithm):
+    name = "surrogate"
+
+    def __init__(self, space, pop_size, seed):
+        super().__init__(space, pop_size, seed)
+        self.rng = np.random.default_rng(seed)
+        self.model = ErrorModel(space, self.rng)
+        self.breed = Breeder(space, mutations=1.0)
+        self.local = Breeder(space, mutations=LOCAL_MUTATIONS)
+        self.tested: list[dict] = []            # full scenes with a verdict, in test order (as the model's rows)
+        self._tested_rows = np.zeros((0, len(space.names)), dtype=np.float32)   # their distance rows
+        self._failing = np.zeros(0, dtype=bool)                                  # and whether they failed
+        self._pending: list[dict] = []
+
+    # ------------------------------------------------------------------ ask
+    def ask(self, n_max: int) -> list[dict]:
+        n = min(n_max, self.pop_size)
+        scenes: list[dict] = []
+        if len(self.model):  # something learnt: screen a pool; otherwise a random generation
+            scenes = self._choose(*self._candidates(n), n)
+        scenes += self._fresh(n - len(scenes), self.rng, {self.space.key(s) for s in scenes})
+        self.seen.update(self.space.key(s) for s in scenes)
+        self._pending = scenes
+        return scenes
+
+    def _candidates(self, n: int) -> tuple[list[dict], list[dict]]:
+        """(scenes, their canonical forms): valid, distinct, never proposed before."""
+        size = min(POOL_PER_SLOT * n, max(POOL_MAX, n))
+        bred, local = (int(size * share) for share in POOL_SHARES[:2])
+        parents = self._parents(max(2, n))
+        children = self.breed.crossover(parents, bred, self.rng) + self.local.mutants(parents, local, self.rng)
+        scenes = [self.space.repair(c, self.rng) for c in children] + self.space.sample(self.rng, size - bred - local)
+        pool: dict[str, dict] = {}
+        for scene in scenes:
+            key = self.space.key(scene)
+            if key not in self.seen:
+                pool.setdefault(key, scene)
+        chosen = list(pool.values())
+        return chosen, [self.space.canonical(s) for s in chosen]
+
+    def _parents(self, k: int, rng: np.random.Generator | None = None) -> list[dict]:
+        """The tested scenes the surrogate expects to fail worst (noise-discounted elitism);
+        ties broken at random."""
+        loss = self.model.observed_loss()
+        order = np.lexsort(((rng or self.rng).random(len(loss)), -loss))
+        return [self.tested[i] for i in order[:k]]
+
+    def _choose(self, pool: list[dict], canonical: list[dict], n: int) -> list[dict]:
+        """Per slot: of the pool's best ``TOP_SHARE`` under one posterior draw, the candidate
+        farthest from every failure found so far and every candidate already chosen."""
+        if not pool:
+            return []
+        draws = self.model.sample_loss(canonical, min(n, len(pool)))
+        rows = self._distance_rows(canonical)
+        novelty = _nearest(rows, self._tested_rows[self._failing][-NOVELTY_REFERENCE:])
+        novelty += 1e-9 * self.rng.random(len(pool))  # ties (no failure yet) broken at random
+        top_k = max(1, int(np.ceil(TOP_SHARE * len(pool))))
+        chosen: list[int] = []
+        for draw in draws:
+            loss = draw + 1e-9 * self.rng.random(len(pool))
+            loss[chosen] = -np.inf
+            top = np.argpartition(-loss, min(top_k, len(pool) - 1))[:top_k]
+            top = top[np.isfinite(loss[top])]
+            best = int(top[np.argmax(novelty[top])])
+            chosen.append(best)
+            novelty = np.minimum(novelty, self.space.distances_sentinel(rows[best], rows))
+        return [pool[i] for i in chosen]
+
+    def _distance_rows(self, canonical: list[dict]) -> np.ndarray:
+        """The diversity measure's rows (``SceneSpace.canonical_vector`` of scenes already canonical)."""
+        features = self.space.features.items()
+        vectors = np.array([[f.encode(c[n]) if n in c else np.nan for n, f in features] for c in canonical])
+        return self.space.distance_rows(vectors.reshape(len(canonical), len(self.space.names)))
+
+    # ------------------------------------------------------------------ tell
+    def tell(self, F: np.ndarray, records: list | None = None) -> None:
+        scenes, self._pending = self._pending, []
+        if not scenes:
+            return
+        if records is not None:
+            targets = [record_targets(r) for r in records]
+        else:  # objectives only: learn the fitness itself
+            targets = [{"fitness": float(np.clip(1.0 - f, 0.0, 1.0))} for f in np.asarray(F, dtype=float)[:, 0]]
+        kept = [s for s, t in zip(scenes, targets) if t is not None]
+        canonical = [self.space.canonical(s) for s in kept]
+        self.model.observe(canonical, [t for t in targets if t is not None])
+        self.tested += kept
+        failing = [max(t.values()) > 0 for t in targets if t is not None]  # any answer wrong
+        self._failing = np.concatenate([self._failing, np.array(failing, dtype=bool)])
+        if kept:
+            self._tested_rows = np.concatenate([self._tested_rows, self._distance_rows(canonical)])
+
+    @property
+    def population(self) -> list[dict]:
+        """The current elite (looking at it must not move the search's RNG)."""
+        return self._parents(self.pop_size, np.random.default_rng(0)) if self.tested else []
+
+
+def _nearest(rows: np.ndarray, reference: np.ndarray, chunk: int = 64) -> np.ndarray:
+    """Distance from each row to its nearest reference row (1 when there is none): the
+    distance of ``SceneSpace.distances_sentinel``, for many rows at once."""
+    if len(reference) == 0:
+        return np.ones(len(rows))
+    out = np.empty(len(rows))
+    for start in range(0, len(rows), chunk):
+        block = rows[start:start + chunk, None, :]
+        out[start:start + chunk] = np.minimum(np.abs(reference[None, :, :] - block), 1.0).mean(axis=2).min(axis=1)
+    return out
