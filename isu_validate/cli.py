@@ -11,6 +11,7 @@ COMMAND_MODULES = [
     "run",        # run, export (search + crash-safe archive)
     "bench",      # bench search|render|...
     "render",     # render one scene or N random ones (Blender)
+    "people",     # people warm|check (the anny bodies of the renders)
     "report",     # report RUN...: RQ1/RQ2 analysis, statistics, HTML
     "sut",        # sut check
     "reference",  # reference train (the embedded reference ISU)

@@ -1,4 +1,9 @@
-"""One-time data setup, run by the Makefile after installing: WordNet for METEOR.
+"""One-time data setup, run by the Makefile after installing: WordNet for METEOR, and the anny
+body model's built data (the people in the renders).
+
+anny builds its model data on first use (about 75 s and 2 GB on two cores, ~824 MB on disk); setup
+does it once into ``ANNY_CACHE_DIR`` (default ``<sys.prefix>/share/anny``, inside the virtual
+environment), where every run reads it, so no user's first run pays for it.
 
 nltk's WordNet reader wants ``<nltk_data>/corpora/wordnet`` with the WordNet 3.0
 database files plus a ``lexnames`` table.  Debian's ``wordnet-base`` and
@@ -11,7 +16,7 @@ links into other trees on some versions.
 
 Idempotent and quick: files already present with the same size are left alone.
 
-    python -m isu_validate.setup_data [--target DIR] [--source DIR]
+    python -m isu_validate.setup_data [--target DIR] [--source DIR] [--skip-anny]
 """
 from __future__ import annotations
 
@@ -86,6 +91,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m isu_validate.setup_data", description=__doc__.split("\n")[0])
     parser.add_argument("--target", type=Path, default=None, help="nltk_data folder (default: %(default)s -> sys.prefix/nltk_data)")
     parser.add_argument("--source", type=Path, default=DEBIAN_WORDNET, help="WordNet 3.0 database folder")
+    parser.add_argument("--skip-anny", action="store_true", help="do not build the anny body model's data")
     args = parser.parse_args(argv)
     try:
         where = install_wordnet(args.target, args.source)
@@ -93,7 +99,18 @@ def main(argv: list[str] | None = None) -> int:
         print(f"setup_data: error: {exc}", file=sys.stderr)
         return 2
     print(f"WordNet ready for METEOR in {where}")
+    if not args.skip_anny:
+        print(f"anny body model ready in {build_anny()}")
     return 0
+
+
+def build_anny() -> Path:
+    """Build anny's model data into its cache unless it is there already (then this is instant)."""
+    from .render.people.model import anny_cache_dir, build_cache, model_cached
+    if model_cached():
+        return anny_cache_dir()
+    print(f"building the anny body model into {anny_cache_dir()} (once; about 75 s and 2 GB)...", flush=True)
+    return build_cache()
 
 
 if __name__ == "__main__":

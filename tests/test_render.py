@@ -32,6 +32,9 @@ CODRIVER_SEAT = ("phone_codriver_seat", "colacan_codriver_seat", "colabottle_cod
 # the context in which each feature is active, and the instance whose mask it must change
 # (None: it changes colour or light, checked through pixels inside `region` or over the whole image)
 CONTEXT = {"child_seat": {"child": "YES", "child_seat_orientation": "FRONT_FACING"},
+           # the phone low by the door (P8) leaves the mirror camera's view behind the wheel for most bodies
+           # (a visibility share of 0-0.2: the label calls it occluded); a tall heavy driver shows it
+           "phone_position": {"driver_height": "H4", "driver_weight": "W4"},
            "child": {"child_seat": "YES", "child_seat_orientation": "FRONT_FACING"},
            "child_seat_orientation": {"child_seat": "YES", "child": "YES"},
            "luggage": {"luggage_orientation": 60.0, "luggage_position": "BACK", "luggage_colour": "YELLOW"},
@@ -41,7 +44,7 @@ AFFECTS = {"driver_gender": "driver", "driver_height": "driver", "driver_weight"
            "phone_position": "phone", "seat_belt": "seat_belt", "child_seat": "child_seat", "child": "child",
            "child_seat_orientation": "child_seat", "luggage": "luggage", "luggage_orientation": "luggage",
            "luggage_position": "luggage", **{f: f for f in CODRIVER_SEAT}}   # these name their instance
-REGION = {"driver_emotion": "driver_face", "tshirt_colour": "driver", "luggage_colour": "luggage"}
+REGION = {"driver_emotion": ("driver_face",), "tshirt_colour": ("driver",), "luggage_colour": ("luggage",)}
 
 
 @pytest.fixture(scope="module")
@@ -91,9 +94,10 @@ def test_every_value_of_every_feature_changes_the_image(name, frames):
             moved = ((seg == iid) != (ref_seg == iid)).sum()
             assert moved >= 8, f"{name}={scene[name]!r}: the {AFFECTS[name]} mask did not change ({moved} px)"
         if name in REGION:
-            inside = (seg == INSTANCE_ID[REGION[name]]) | (ref_seg == INSTANCE_ID[REGION[name]])
+            ids = [INSTANCE_ID[part] for part in REGION[name]]
+            inside = np.isin(seg, ids) | np.isin(ref_seg, ids)
             assert changed[inside].sum() >= 0.5 * changed.sum() and changed[inside].sum() >= 3, \
-                f"{name}: the change is not on the {REGION[name]}"
+                f"{name}: the change is not on the {'/'.join(REGION[name])}"
     if name == "phone_position":  # ten different poses, all distinct from each other
         imgs = [r[0] for r in rendered]
         for i in range(len(imgs)):

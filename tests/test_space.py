@@ -177,3 +177,4 @@ def test_a_scene_file_holding_a_list_is_a_clear_error_not_a_traceback(tmp_path, 
     assert main(["render", str(path), "--out", str(tmp_path / "x.png"), "--preset", "draft"]) == 2
     assert "not a list; write one scene per file" in capsys.readouterr().err
     assert not (tmp_path / "x.png").exists()
+

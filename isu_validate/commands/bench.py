@@ -9,6 +9,7 @@ import importlib
 
 BENCH_MODULES = [
     "isu_validate.render.bench",   # bench render
+    "isu_validate.render.bench_faces",   # bench faces
     "capture.bench",          # bench calib
     "isu_validate.search.bench",
     "isu_validate.search.effectiveness.bench",  # bench effectiveness

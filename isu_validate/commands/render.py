@@ -32,6 +32,8 @@ def register(sub) -> None:
     p.add_argument("--cache", type=Path, help="render cache folder (a scene seen before costs nothing)")
     p.add_argument("--log", type=Path, help="folder for Blender's console log (default: <out folder>/logs)")
     p.add_argument("--timeout", type=float, default=240.0, help="seconds per render before the worker is killed")
+    p.add_argument("--sheet-tile", type=int, default=320, metavar="PX",
+                   help="width of each frame on the contact sheet of --random (default 320)")
     p.set_defaults(func=run)
 
 
@@ -80,7 +82,8 @@ def run(args) -> int:
     if args.random is not None:
         from ..render.contact import contact_sheet
         from ..render.outputs import CONTACT_SHEET
-        sheet = contact_sheet([out for out, _ in targets if out.exists()], folder / CONTACT_SHEET)
+        sheet = contact_sheet([out for out, _ in targets if out.exists()], folder / CONTACT_SHEET,
+                              tile_width=args.sheet_tile)
         print(f"contact sheet: {sheet}", file=sys.stderr)
     print(f"Blender log: {log_dir}", file=sys.stderr)
     if unusable:

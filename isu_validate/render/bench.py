@@ -31,6 +31,8 @@ def register_bench(sub) -> None:
                    "share of answers unchanged against the reference frame: the error that matters")
     p.add_argument("--out", type=Path, default=Path("bench-render"), help="folder for frames and bench.json; "
                    "reference renders found there are reused")
+    p.add_argument("--without-people", action="store_true",
+                   help="also time each preset with the driver and child left out: what the people cost")
     p.set_defaults(func=run)
 
 
@@ -48,6 +50,8 @@ def run(args) -> int:
     for name in [p.strip() for p in args.presets.split(",") if p.strip()]:
         preset = get_preset(name, threads=args.threads)
         rows.append(_bench_preset(preset, scenes, refs, args, space))
+        if args.without_people:
+            rows[-1]["without_people"] = _bench_preset(preset, scenes, None, args, space, people=False)
         if sut:
             rows[-1]["sut_unchanged"] = sut.unchanged([args.out / f"{preset.name}-{i}.png" for i in range(len(scenes))])
         _print_row(rows[-1])
@@ -77,22 +81,24 @@ def _references(scenes, reference, args, space) -> list[np.ndarray]:
     return [cv2.imread(str(p)) for p in paths], paths
 
 
-def _bench_preset(preset, scenes, refs, args, space) -> dict:
+def _bench_preset(preset, scenes, refs, args, space, people: bool = True) -> dict:
     from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
     from . import open_renderer
     times, psnr, ssim = [], [], []
-    parts = {"update_s": [], "render_s": [], "write_s": [], "worker_cpu_s": [], "footprint_s": []}
+    parts = {"people_s": [], "update_s": [], "render_s": [], "write_s": [], "worker_cpu_s": [], "footprint_s": []}
     with open_renderer(preset, args.rig, log_dir=args.out / "logs") as r:
-        r.render(scenes[0], args.out / f"{preset.name}-warmup.png")   # kernel load, first BVH: not timed
+        r.show_people = people
+        tag = "" if people else "-nopeople"
+        r.render(scenes[0], args.out / f"{preset.name}{tag}-warmup.png")   # kernel load, first BVH: not timed
         for k in range(args.repeat):
-            for i, (scene, ref) in enumerate(zip(scenes, refs)):
-                out = args.out / f"{preset.name}-{i}.png"
+            for i, (scene, ref) in enumerate(zip(scenes, refs or [None] * len(scenes))):
+                out = args.out / f"{preset.name}{tag}-{i}.png"
                 result = r.render(scene, out)
                 times.append(result.timings["total_s"])
                 for key in parts:
                     parts[key].append(result.timings.get(key, 0.0))
-                if k == 0:
+                if k == 0 and refs is not None:
                     img = cv2.imread(str(out))
                     if img.shape != ref.shape:
                         img = cv2.resize(img, (ref.shape[1], ref.shape[0]), interpolation=cv2.INTER_CUBIC)
@@ -103,7 +109,8 @@ def _bench_preset(preset, scenes, refs, args, space) -> dict:
             "denoise": preset.denoise, "prefilter": preset.prefilter, "max_bounces": preset.max_bounces,
             "s_per_frame": {"median": statistics.median(times), "min": min(times), "max": max(times)},
             "median_parts_s": {k: statistics.median(v) for k, v in parts.items()},
-            "psnr_db": float(np.mean(psnr)), "ssim": float(np.mean(ssim)), "frames": len(times)}
+            "psnr_db": float(np.mean(psnr)) if psnr else None, "ssim": float(np.mean(ssim)) if ssim else None,
+            "frames": len(times)}
 
 
 class _SUTCheck:
@@ -138,3 +145,10 @@ def _print_row(row: dict) -> None:
           f"write {row['median_parts_s']['write_s']:.2f}; worker CPU {row['median_parts_s']['worker_cpu_s']:.2f} s; "
           f"footprints {1000 * row['median_parts_s']['footprint_s']:.0f} ms]",
           flush=True)
+    bare = row.get("without_people")
+    if bare:
+        cost = s["median"] - bare["s_per_frame"]["median"]
+        cpu = row["median_parts_s"]["worker_cpu_s"] - bare["median_parts_s"]["worker_cpu_s"]
+        print(f"{'':>9} without people: s/frame median {bare['s_per_frame']['median']:.2f}; the people cost "
+              f"{cost:+.2f} s/frame ({cpu:+.2f} worker CPU s; posing on the host {row['median_parts_s']['people_s']:.3f} s)",
+              flush=True)

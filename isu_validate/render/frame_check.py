@@ -32,8 +32,9 @@ def frame_stats(image: Path | np.ndarray) -> dict:
             "saturated_share": round(float(np.count_nonzero(luma >= SATURATED_LEVEL)) / luma.size, 4)}
 
 
-def frame_problem(stats: Mapping, visible: Mapping[str, Mapping]) -> str | None:
-    """Why a scene frame cannot show the scene, with the fix; None when it can."""
+def frame_problem(stats: Mapping, visible: Mapping[str, Mapping], driver_expected: bool = True) -> str | None:
+    """Why a scene frame cannot show the scene, with the fix; None when it can (``driver_expected``
+    False: a frame rendered without people on purpose, e.g. to time what they cost)."""
     if stats["luma_p99"] < BLACK_P99:
         return (f"black frame: 99% of its pixels are darker than {BLACK_P99}/255 (luma p99 {stats['luma_p99']:g}), "
                 f"so the camera sees no lit scene; check the camera rig's pose (--camera/--rig, --extrinsics-from) "
@@ -42,7 +43,7 @@ def frame_problem(stats: Mapping, visible: Mapping[str, Mapping]) -> str | None:
         return (f"saturated frame: {100 * stats['saturated_share']:.0f}% of its pixels are at "
                 f"{SATURATED_LEVEL}/255 or above, so the scene is washed out; check the cabin rig's [lighting] "
                 f"(window_light_w, environment_strength) and the camera's exposure")
-    if not any(visible.get(p, {}).get("pixels", 0) for p in DRIVER_PARTS):
+    if driver_expected and not any(visible.get(p, {}).get("pixels", 0) for p in DRIVER_PARTS):
         return ("the driver is not in the frame (no driver pixels in the segmentation), so no question about the "
                 "scene can be judged; check that the camera rig's pose looks at the driver's seat")
     return None

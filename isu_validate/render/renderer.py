@@ -22,13 +22,15 @@ from .cache import RenderCache
 from .camera import CameraRig, load_render_camera, pinhole_plan
 from .frame_check import frame_problem, frame_stats
 from .outputs import channel_paths, footprint_pixels, parse_channels, srgb_encode, write_outputs
+from .people import People, PeopleStore
+from .people.store import code_version as people_version
 from .presets import Preset, get_preset
 from .visibility import feature_visibility, min_visible_for, needed_parts, part_shares
 from .worker import BlenderWorker, WorkerCrashed, WorkerFailed, WorkerTimeout
 
 # bump when the scene content or the outputs change: it is part of every cache key
-# 2: driver_face part, footprints; 3: the phone, can and bottle lie on the co-driver seat
-RENDERER_VERSION = "isu-blender-3"
+# 2: driver_face part, footprints; 3: the phone, can and bottle lie on the co-driver seat; 4: anny people
+RENDERER_VERSION = "isu-blender-4"
 
 # what the worker shows for a feature the scene space does not have (or that is inactive)
 DEFAULTS = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height": "H2", "driver_weight": "W2",
@@ -43,7 +45,8 @@ class BlenderRenderer:
     def __init__(self, preset: str | Preset = "draft", camera: str | os.PathLike | CameraRig = "default",
                  cabin: str | os.PathLike | dict = "default", channels=(), cache_dir=None, log_dir=None,
                  timeout_s: float = 240.0, space: SceneSpace | str | None = None, threads: int = 0,
-                 extrinsics_from: str | os.PathLike | CameraRig | None = None, min_visible=None):
+                 extrinsics_from: str | os.PathLike | CameraRig | None = None, min_visible=None,
+                 people_cache: str | os.PathLike | None = None):
         self.preset = get_preset(preset, threads=threads) if isinstance(preset, str) else preset
         self.rig = load_render_camera(camera, extrinsics_from)   # refuses an unregistered pose
         self.render_rig = self.rig.scaled(self.preset.scale)
@@ -61,9 +64,11 @@ class BlenderRenderer:
         self._owner = os.getpid()
         self._count = 0
         self.unrendered = sorted(set(self.space.names) - set(DEFAULTS))
+        self.people = People(self.cabin, PeopleStore(people_cache) if people_cache else None)
+        self.show_people = True     # False renders the cabin without driver and child (bench render's people cost)
         self.imaging = self.rig.imaging       # the camera's imaging model; None = linear light as sRGB
-        identity = [RENDERER_VERSION, self.render_rig.hash, cabin_hash(self.cabin), self.preset.to_worker(),
-                    self.preset.scale, self.channels, self.parts]
+        identity = [RENDERER_VERSION, people_version(), self.render_rig.hash, cabin_hash(self.cabin),
+                    self.preset.to_worker(), self.preset.scale, self.channels, self.parts]
         if self.imaging is not None:          # a camera without a model keeps its cache keys
             identity.append(self.imaging.hash)
         self._identity = hashlib.sha256(json.dumps(identity, sort_keys=True).encode()).hexdigest()
@@ -83,7 +88,7 @@ class BlenderRenderer:
         timings["total_s"] = time.perf_counter() - t0
         shares, occluded = feature_visibility(self.space, canonical, parts, self.min_visible)
         frame = frame_stats(out)
-        problem = frame_problem(frame, visible)
+        problem = frame_problem(frame, visible, driver_expected=self.show_people)
         label = channel_paths(out)["label"]
         self._write_label(label, canonical, key, cached, timings, {
             "visible": visible, "parts": parts, "frame": frame, "frame_problem": problem,
@@ -142,13 +147,15 @@ class BlenderRenderer:
         box (min, max corner) in the cabin frame, metres. For checking a rig's geometry."""
         features = {**DEFAULTS, **self.space.check(scene)}
         try:
-            reply = self._ensure_worker().request({"op": "bounds", "features": features}, self.timeout_s)
+            reply = self._ensure_worker().request({"op": "bounds", "features": features,
+                                                   "people": self._people_for(features, {})}, self.timeout_s)
         except (WorkerCrashed, WorkerTimeout, WorkerFailed) as exc:
             raise RenderError(f"Blender could not place this scene: {exc} (log: {self.log_path})") from exc
         return {name: (box[0], box[1]) for name, box in reply["bounds"].items()}
 
     def cache_key(self, canonical: Mapping[str, Any]) -> str:
-        return hashlib.sha256(f"{self._identity}:{self.space.key(canonical)}".encode()).hexdigest()
+        people = "" if self.show_people else ":without-people"
+        return hashlib.sha256(f"{self._identity}{people}:{self.space.key(canonical)}".encode()).hexdigest()
 
     @property
     def worker_pid(self) -> int | None:
@@ -188,6 +195,9 @@ class BlenderRenderer:
 
     def _render_once(self, features: dict, out: Path, extras: dict, tag: str, parts: list[str],
                      developed: dict | None = None):
+        t_people = time.perf_counter()
+        people = self._people_for(features, extras)
+        people_s = time.perf_counter() - t_people
         worker = self._ensure_worker()
         self._count += 1
         exr = self._tmp / f"frame-{self._count}.exr"
@@ -195,7 +205,7 @@ class BlenderRenderer:
         camera = {**self.plan.blender_camera(), "f": self.plan.f, "cx": self.plan.cx, "cy": self.plan.cy,
                   "position": list(self.render_rig.position), "rotation": [list(r) for r in self.render_rig.rotation]}
         reply = worker.request({"op": "render", "features": features, "camera": camera, "extras": extras,
-                                "preset": self.preset.to_worker(), "exr": str(exr), "tag": tag,
+                                "people": people, "preset": self.preset.to_worker(), "exr": str(exr), "tag": tag,
                                 "footprints": parts, "footprint_file": str(masks)}, self.timeout_s)
         t = time.perf_counter()
         try:
@@ -207,11 +217,17 @@ class BlenderRenderer:
         finally:
             exr.unlink(missing_ok=True)
             masks.unlink(missing_ok=True)
-        timings = {"update_s": reply["update_s"], "render_s": reply["render_s"],
+        timings = {"people_s": people_s, "update_s": reply["update_s"], "render_s": reply["render_s"],
                    "write_s": reply["save_s"] + time.perf_counter() - t, "worker_cpu_s": reply["cpu_s"]}
         if parts:
             timings["footprint_s"] = reply["footprint_s"]
         return paths, visible, footprints, timings
+
+    def _people_for(self, features: dict, extras: dict) -> dict:
+        """The host's posed driver and child files for the worker (None: absent)."""
+        if not self.show_people:
+            return {"driver": None, "child": None}
+        return self.people.for_scene(features, with_driver=not extras.get("hide_driver"))
 
     def _developer(self, tag: str, developed: dict):
         """The post-render step: linear light through the camera's imaging model (or plain sRGB).

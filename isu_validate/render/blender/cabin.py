@@ -6,6 +6,8 @@ import math
 
 from mathutils import Euler, Vector
 
+from ..cabin_geometry import RIM_TUBE, seat_boxes
+from ..cabin_geometry import wheel_frame as geometry_wheel_frame
 from ..labels import INSTANCE_ID
 from . import mesh as M
 
@@ -81,41 +83,27 @@ def _dashboard(s, plastic, trim, coll, pid):
 
 
 def _seat(name, seat, coll, pid):
-    """Cushion, tilted backrest and headrest(s) from the rig's cushion top-centre point."""
+    """Cushion, base, tilted backrest and headrest(s): the boxes of ``cabin_geometry.seat_boxes``."""
     fabric = M.material("seat_fabric", FABRIC, roughness=0.95, specular=0.2)
-    cx, cy, cz = seat["cushion"]
-    w, d, bh = seat["width"], seat["depth"], seat["back_height"]
-    tilt = math.radians(seat["back_tilt_deg"])
-    back_base = Vector((cx - d / 2 + 0.05, cy, cz))
-    back_dir = Vector((-math.sin(tilt), 0, math.cos(tilt)))
-    back_centre = back_base + back_dir * (bh / 2) + Vector((-0.06, 0, 0))
-    parts = [
-        M.box(f"{name}_cushion", (cx, cy, cz - 0.07), (d, w, 0.14), fabric, coll, pid, rounded=0.18),
-        M.box(f"{name}_base", (cx, cy, (cz - 0.14) / 2), (d * 0.8, w * 0.8, cz - 0.14), M.material("plastic", PLASTIC), coll, pid),
-        M.box(f"{name}_back", back_centre, (0.13, w, bh), fabric, coll, pid, rotation=(0, -tilt, 0), rounded=0.18),
-    ]
-    heads = [cy] if w < 0.8 else [cy - w / 3, cy + w / 3, cy]
-    for i, hy in enumerate(heads):
-        top = back_base + back_dir * (bh + 0.1) + Vector((-0.07, hy - cy, 0))
-        parts.append(M.box(f"{name}_headrest{i}", top, (0.1, 0.26, 0.18), fabric, coll, pid,
-                           rotation=(0, -tilt, 0), rounded=0.3))
+    plastic = M.material("plastic", PLASTIC)
+    parts = []
+    for box in seat_boxes(name, seat):
+        angle = math.atan2(-box.R[2, 0], box.R[0, 0])      # the boxes turn about y only
+        parts.append(M.box(box.name, box.centre, box.size, plastic if box.name.endswith("_base") else fabric,
+                           coll, pid, rotation=(0, angle, 0), rounded=box.rounded))
     return parts
 
 
 def wheel_frame(wheel: dict):
     """(centre, lateral axis, up-in-rim-plane axis, normal towards the driver) of the steering wheel."""
-    tilt = math.radians(wheel["tilt_deg"])
-    centre = Vector(wheel["centre"])
-    e_y = Vector((0, 1, 0))
-    e_up = Vector((-math.sin(tilt), 0, math.cos(tilt)))
-    normal = Vector((-math.cos(tilt), 0, -math.sin(tilt)))
-    return centre, e_y, e_up, normal
+    return tuple(Vector(v) for v in geometry_wheel_frame(wheel))
 
 
 def _steering_wheel(wheel, mat, coll, pid):
     centre, _, _, normal = wheel_frame(wheel)
     r = wheel["radius"]
-    rim = M.new_object("wheel_rim", M.unit_torus(1.0, 0.12), M.material("wheel", (0.012, 0.012, 0.012), 0.45), coll, pid)
+    rim = M.new_object("wheel_rim", M.unit_torus(1.0, RIM_TUBE), M.material("wheel", (0.012, 0.012, 0.012), 0.45),
+                       coll, pid)
     rot = normal.to_track_quat("Z", "Y").to_euler()
     rim.location, rim.rotation_euler, rim.scale = centre, rot, (r, r, r)
     hub = M.new_object("wheel_hub", M.unit_cylinder(), mat, coll, pid)

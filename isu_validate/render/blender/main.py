@@ -36,7 +36,7 @@ def main() -> int:
             elif op == "render":
                 reply = _render(studio, request)
             elif op == "bounds":
-                studio.apply(request["features"], request.get("extras", {}))
+                studio.apply(request["features"], request.get("extras", {}), request.get("people", {}))
                 reply = {"bounds": studio.bounds()}
             elif op == "ping":
                 reply = {}
@@ -55,7 +55,7 @@ def _render(studio, request: dict) -> dict:
     t, cpu = time.perf_counter(), time.process_time()
     studio.set_preset(request["preset"])
     studio.set_camera(request["camera"])
-    studio.apply(request["features"], request.get("extras", {}))
+    studio.apply(request["features"], request.get("extras", {}), request.get("people", {}))
     update_s = time.perf_counter() - t
     print(f"[isu] render {request.get('tag', '')}", flush=True)
     times = studio.render(request["exr"])

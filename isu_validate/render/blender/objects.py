@@ -1,7 +1,7 @@
-"""Objects: child seat (front- or rear-facing) with an optional baby, suitcase, the phone in the driver's
-hand, and the phone, cola can and cola bottle lying on the co-driver seat (each its own render instance).
-Each is built the first time a scene needs it (never for scenes that do not), then only shown, hidden,
-moved or recoloured."""
+"""Objects: the child seat (front- or rear-facing; the child in it is an anny body, see people.py), the
+suitcase, the phone in the driver's hand, and the phone, cola can and cola bottle lying on the co-driver
+seat (each its own render instance). Each is built the first time a scene needs it (never for scenes that
+do not), then only shown, hidden, moved or recoloured."""
 from __future__ import annotations
 
 import math
@@ -65,39 +65,6 @@ def build_child_seat(coll, front_facing: bool) -> Group:
                         rotation=(0, -recline, 0)))
         handle = g.add(M.new_object("cs_handle", M.unit_torus(1.0, 0.09), shell, coll, pid))
         handle.location, handle.rotation_euler, handle.scale = (0.0, 0, 0.30), (math.pi / 2, 0, 0), (0.2, 0.2, 0.2)
-    return g
-
-
-def build_child(coll, front_facing: bool) -> Group:
-    """A toddler sitting upright (front-facing seat) or a baby lying reclined (rear-facing carrier)."""
-    g = Group("child_" + ("front" if front_facing else "rear"), coll)
-    pid = INSTANCE_ID["child"]
-    skin = M.material("skin", (0.50, 0.30, 0.21))
-    suit = M.material("child_suit", (0.20, 0.45, 0.75), roughness=0.9)
-    dark = M.material("pupil", (0.01, 0.008, 0.006))
-    hair = M.material("hair", (0.035, 0.018, 0.010))
-    if front_facing:
-        hip, up = Vector((-0.02, 0, 0.22)), Vector((-0.12, 0, 1)).normalized()
-        fwd = Vector((1, 0, 0.12)).normalized()
-    else:
-        # lying on the plate, head towards +x and up, looking up and back
-        hip, up = Vector((-0.14, 0, 0.22)), Vector((math.cos(math.radians(35)), 0, math.sin(math.radians(35))))
-        fwd = Vector((-math.sin(math.radians(35)), 0, math.cos(math.radians(35))))
-    chest = hip + up * 0.2
-    head = chest + up * 0.12
-    body = g.add(M.new_object("child_body", M.unit_sphere(), suit, coll, pid))
-    M.place_capsule(body, hip, chest, 0.085)
-    g.add(M.ellipsoid("child_head", head, (0.075, 0.07, 0.078), skin, coll, pid))
-    g.add(M.ellipsoid("child_hair", head - fwd * 0.02 + up * 0.02, (0.07, 0.072, 0.07), hair, coll, pid))
-    for side in (1, -1):
-        g.add(M.ellipsoid(f"child_eye{side}", head + fwd * 0.068 + Vector((0, side * 0.026, 0)) + up * 0.01,
-                          (0.008, 0.009, 0.009), dark, coll, pid))
-        arm = g.add(M.new_object(f"child_arm{side}", M.unit_sphere(), suit, coll, pid))
-        M.place_capsule(arm, chest + Vector((0, side * 0.09, 0)), chest + fwd * 0.12 + Vector((0, side * 0.11, -0.06)), 0.03)
-        leg = g.add(M.new_object(f"child_leg{side}", M.unit_sphere(), suit, coll, pid))
-        # seated toddler: legs along the seat; lying baby: legs towards the feet end, knees up a little
-        foot = fwd * 0.22 if front_facing else -up * 0.18 + fwd * 0.06
-        M.place_capsule(leg, hip + Vector((0, side * 0.05, 0)), hip + foot + Vector((0, side * 0.06, 0.0)), 0.04)
     return g
 
 
@@ -205,19 +172,13 @@ class Objects:
     def _child_seat(self, f: dict) -> None:
         if f.get("child_seat") != "YES":
             self._show_only("child_seat:", None)
-            self._show_only("child:", None)
             return
         front = f["child_seat_orientation"] == "FRONT_FACING"
         seat_key = f"child_seat:{'front' if front else 'rear'}"
         seat = self._group(seat_key, lambda: build_child_seat(self.coll, front))
         # an imported seat is one model facing +x: turn it round for rear-facing
         seat.place(self.anchors["child_seat"], (0, 0, math.pi if seat.asset and not front else 0))
-        self._show_only("child_seat:", seat_key)
-        child_key = f"child:{'front' if front else 'rear'}" if f["child"] == "YES" else None
-        if child_key:
-            child = self._group(child_key, lambda: build_child(self.coll, front))
-            child.place(self.anchors["child_seat"], (0, 0, 0))
-        self._show_only("child:", child_key)
+        self._show_only("child_seat:", seat_key)   # the child in it is an anny body (blender/people.py)
 
     def _luggage(self, f: dict) -> None:
         if f.get("luggage") != "YES":

@@ -12,9 +12,9 @@ from mathutils import Matrix, Vector
 
 from ..labels import INSTANCE_ID
 from .cabin import build_cabin
-from .driver import Driver
 from .lighting import Lighting
 from .objects import Group, Objects
+from .people import Child, Driver
 
 _CV_TO_BLENDER = Matrix(((1, 0, 0), (0, -1, 0), (0, 0, -1)))  # OpenCV camera axes -> Blender camera axes
 
@@ -28,7 +28,8 @@ class Studio:
         self.coll = coll
         self.parts = build_cabin(rig, coll)
         self.lighting = Lighting(rig, self.scene, coll)
-        self.driver = Driver(rig, coll)
+        self.driver = Driver(rig, coll, self.parts["driver_seat"] + [bpy.data.objects["belt_buckle"]])
+        self.child = Child(coll)
         self.objects = Objects(rig, coll, importer=self._import_part)
         self._replace_fixed_parts()
         self.camera = self._camera()
@@ -137,14 +138,15 @@ class Studio:
                     obj.hide_render = True
 
     # ------------------------------------------------------------------ per scene
-    def apply(self, features: dict, extras: dict) -> None:
+    def apply(self, features: dict, extras: dict, people: dict) -> None:
+        """``people``: the host's topology and state files of the driver and the child (None: absent)."""
         self.lighting.apply(features["external_light"], features["car_lights"])
-        if extras.get("hide_driver"):
+        if people.get("driver") is None:
             self.driver.hide()
-            self.objects.apply(features, None)
         else:
-            self.driver.apply(features)
-            self.objects.apply(features, self.driver.hand_pose())
+            self.driver.apply(features, people["driver"])
+        self.child.apply(people.get("child"))
+        self.objects.apply(features, self.driver.hand_pose())
         self._board(extras.get("board"))
 
     def _board(self, spec: dict | None) -> None:

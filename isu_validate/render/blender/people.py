@@ -1,0 +1,279 @@
+"""People in the Blender worker: anny bodies posed on the host (``render/people``), shown here as
+persistent meshes whose vertices are swapped per scene (a few milliseconds), never rebuilt.
+
+A person is two objects that share one anny topology split at the neck - the head (with the hair:
+its own segmentation instance, ``driver_face`` for the driver) and the rest of the body - plus the
+hair shell. The driver also has the seat belt, laid on the body by the host, and holds the phone
+where the host placed it."""
+from __future__ import annotations
+
+import bpy
+import numpy as np
+from mathutils import Vector
+
+from ..labels import INSTANCE_ID
+from . import mesh as M
+
+SKIN = (0.38, 0.21, 0.14)   # linear RGB: a medium skin tone, apart from a white T-shirt in bright light
+SHIRT = {"BLACK": (0.012, 0.012, 0.013), "WHITE": (0.80, 0.80, 0.78)}
+HAIR = (0.030, 0.016, 0.009)
+BELT = (0.10, 0.10, 0.11)
+# garments drawn where their per-vertex field (render/people/regions.py) is positive, in this order
+# (later ones cover earlier ones): colour, roughness
+_GARMENTS = (("trousers", (0.02, 0.03, 0.07), 0.9), ("shoes", (0.015, 0.012, 0.01), 0.5),
+             ("shirt", SHIRT["WHITE"], 0.85), ("suit", (0.20, 0.45, 0.75), 0.9), ("brows", HAIR, 0.8),
+             ("scalp", HAIR, 0.55))
+LIPS = (0.30, 0.10, 0.085)
+# the other material slots (render/people/regions.SLOTS): colour, roughness, specular
+_SLOT_LOOK = {"eye_white": ((0.75, 0.72, 0.68), 0.2, 0.5), "iris": ((0.03, 0.018, 0.01), 0.15, 0.6),
+              "mouth": ((0.06, 0.01, 0.01), 0.6, 0.2), "hair": (HAIR, 0.55, 0.25)}
+
+
+def _load(path: str) -> dict:
+    with np.load(path, allow_pickle=False) as data:
+        return {k: data[k] for k in data.files}
+
+
+class Person:
+    """One anny body: built from a topology file once, re-posed from state files."""
+
+    def __init__(self, name: str, coll, body_id: int, head_id: int):
+        self.name, self.coll, self.body_id, self.head_id = name, coll, body_id, head_id
+        self.topology_path = None
+        self.state_path = None
+        self.parts: dict[str, bpy.types.Object] = {}
+        self.maps: dict[str, np.ndarray] = {}
+        self.materials: dict[str, bpy.types.Material] = {}
+        self.lips_mask = ""
+
+    def show(self, visible: bool) -> None:
+        for obj in self.parts.values():
+            obj.hide_render = not visible
+
+    def set(self, topology: str, state: str) -> dict:
+        """Show this person in a state; returns the state's arrays (belt, phone...)."""
+        if topology != self.topology_path:
+            self._build(_load(topology))
+            self.topology_path = topology
+            self.state_path = None
+        data = _load(state)
+        if state != self.state_path:
+            for part, index in self.maps.items():
+                source = data["hair"] if part == "hair" else data["vertices"][index]
+                mesh = self.parts[part].data
+                mesh.vertices.foreach_set("co", np.ascontiguousarray(source, np.float32).ravel())
+                mesh.update()
+            self.state_path = state
+        self.show(True)
+        return data
+
+    # ------------------------------------------------------------------ building
+    def _build(self, topo: dict) -> None:
+        for obj in self.parts.values():
+            bpy.data.objects.remove(obj)
+        faces, slots, head = topo["faces"], topo["slots"], topo["head"]
+        self.lips_mask = str(topo["lips_mask"])
+        mats = [self._material(str(n)) for n in topo["slot_names"]]
+        fields = {str(k)[6:]: topo[k] for k in topo if str(k).startswith("field_")}
+        self.parts, self.maps = {}, {}
+        for part, chosen, pid in (("body", ~head, self.body_id), ("head", head, self.head_id)):
+            used, local = np.unique(faces[chosen], return_inverse=True)
+            mesh = _mesh(f"{self.name}_{part}", len(used), local.reshape(-1, 3), slots[chosen], mats,
+                         topo["uv"].reshape(-1, 3, 2)[chosen])
+            for field, values in fields.items():
+                mesh.attributes.new(field, "FLOAT", "POINT").data.foreach_set(
+                    "value", np.ascontiguousarray(values[used], np.float32))
+            self.parts[part] = self._object(f"{self.name}_{part}", mesh, pid)
+            self.maps[part] = used
+        hair_mat = self._material("hair")
+        mesh = _mesh(f"{self.name}_hair", len(topo["hair_i"]), topo["hair_faces"],
+                     np.zeros(len(topo["hair_faces"]), np.uint8), [hair_mat], None)
+        self.parts["hair"] = self._object(f"{self.name}_hair", mesh, self.head_id)
+        self.maps["hair"] = topo["hair_i"]    # only its length counts: the hair's vertices come whole
+
+    def _object(self, name, mesh, pid):
+        obj = bpy.data.objects.new(name, mesh)
+        obj.pass_index = pid
+        self.coll.objects.link(obj)
+        return obj
+
+    def _material(self, slot: str) -> bpy.types.Material:
+        if slot not in self.materials:
+            if slot == "body":
+                self.materials[slot] = _body_material(f"{self.name}_body", self.lips_mask)
+            else:
+                colour, roughness, specular = _SLOT_LOOK[slot]
+                self.materials[slot] = M.material(f"{self.name}_{slot}", colour, roughness=roughness,
+                                                  specular=specular)
+        return self.materials[slot]
+
+    def set_shirt(self, colour) -> None:
+        self._material("body").node_tree.nodes["colour_shirt"].outputs[0].default_value = (*colour, 1.0)
+
+
+def _body_material(name: str, lips_mask: str) -> bpy.types.Material:
+    """Skin with the garments drawn over it where their vertex fields are positive, and the lips where
+    MPFB's UV lip mask is bright."""
+    mat = bpy.data.materials.new(name)
+    mat.use_nodes = True
+    nodes, links = mat.node_tree.nodes, mat.node_tree.links
+    bsdf = nodes["Principled BSDF"]
+    bsdf.inputs["Specular IOR Level"].default_value = 0.3
+    bsdf.distribution = "GGX"
+    colour = _rgb(nodes, "colour_skin", SKIN)
+    rough = _value(nodes, 0.5)
+    for field, rgb, roughness in _GARMENTS:
+        inside = _inside(nodes, links, field)
+        colour = _mix(nodes, links, inside, colour, _rgb(nodes, f"colour_{field}", rgb).outputs[0])
+        rough = _mix(nodes, links, inside, rough, _value(nodes, roughness), "FLOAT")
+    uv = nodes.new("ShaderNodeUVMap")
+    uv.uv_map = "UVMap"
+    lips = nodes.new("ShaderNodeTexImage")
+    lips.image = bpy.data.images.load(lips_mask, check_existing=True)
+    lips.image.colorspace_settings.name = "Non-Color"
+    links.new(uv.outputs["UV"], lips.inputs["Vector"])
+    colour = _mix(nodes, links, lips.outputs["Color"], colour, _rgb(nodes, "colour_lips", LIPS).outputs[0])
+    links.new(colour, bsdf.inputs["Base Color"])
+    links.new(rough, bsdf.inputs["Roughness"])
+    return mat
+
+
+def _inside(nodes, links, field: str):
+    """1 where the vertex field is positive (interpolated across triangles: a straight, sharp edge)."""
+    attr = nodes.new("ShaderNodeAttribute")
+    attr.attribute_type, attr.attribute_name = "GEOMETRY", field
+    step = nodes.new("ShaderNodeMath")
+    step.operation = "GREATER_THAN"
+    step.inputs[1].default_value = 0.0
+    links.new(attr.outputs["Fac"], step.inputs[0])
+    return step.outputs[0]
+
+
+def _rgb(nodes, name: str, colour):
+    node = nodes.new("ShaderNodeRGB")
+    node.name = name
+    node.outputs[0].default_value = (*colour, 1.0)
+    return node
+
+
+def _value(nodes, value: float):
+    node = nodes.new("ShaderNodeValue")
+    node.outputs[0].default_value = value
+    return node.outputs[0]
+
+
+def _mix(nodes, links, factor, a, b, kind: str = "RGBA"):
+    node = nodes.new("ShaderNodeMix")
+    node.data_type = kind
+    suffix = "Color" if kind == "RGBA" else "Float"
+    links.new(factor, _socket(node.inputs, "Factor_Float"))
+    links.new(a if not hasattr(a, "outputs") else a.outputs[0], _socket(node.inputs, f"A_{suffix}"))
+    links.new(b, _socket(node.inputs, f"B_{suffix}"))
+    return _socket(node.outputs, f"Result_{suffix}")
+
+
+def _socket(sockets, identifier: str):
+    """A socket by identifier (ShaderNodeMix has several sockets of one name, one per data type)."""
+    return next(s for s in sockets if s.identifier == identifier)
+
+
+def _mesh(name: str, n_vertices: int, triangles: np.ndarray, slots: np.ndarray, materials, uv_corners):
+    mesh = bpy.data.meshes.new(name)
+    mesh.vertices.add(n_vertices)
+    mesh.loops.add(len(triangles) * 3)
+    mesh.polygons.add(len(triangles))
+    mesh.loops.foreach_set("vertex_index", np.ascontiguousarray(triangles, np.int32).ravel())
+    mesh.polygons.foreach_set("loop_start", np.arange(0, len(triangles) * 3, 3, dtype=np.int32))
+    mesh.polygons.foreach_set("loop_total", np.full(len(triangles), 3, np.int32))
+    mesh.polygons.foreach_set("use_smooth", np.ones(len(triangles), bool))
+    for mat in materials:
+        mesh.materials.append(mat)
+    mesh.polygons.foreach_set("material_index", np.ascontiguousarray(slots, np.int32))
+    if uv_corners is not None:
+        layer = mesh.uv_layers.new(name="UVMap")
+        layer.data.foreach_set("uv", np.ascontiguousarray(uv_corners, np.float32).ravel())
+    mesh.update(calc_edges=True)
+    mesh.validate(clean_customdata=False)
+    return mesh
+
+
+class Driver:
+    """The driver: an anny body in a T-shirt, the seat belt over it when worn, the phone in hand, and
+    the driver's seat slid on its track to fit (with the belt buckle mounted on it)."""
+
+    def __init__(self, rig: dict, coll, seat_parts: list):
+        self.person = Person("driver", coll, INSTANCE_ID["driver"], INSTANCE_ID["driver_face"])
+        self.belt = _Belt(rig["seat_belt"], coll)
+        self.phone_hand = None
+        self.seat = [(obj, obj.location.x) for obj in seat_parts]
+
+    def slide_seat(self, shift: float) -> None:
+        for obj, x in self.seat:
+            obj.location.x = x + shift
+
+    def apply(self, f: dict, spec: dict) -> None:
+        data = self.person.set(spec["topology"], spec["state"])
+        self.slide_seat(float(data["seat_shift"]))
+        self.person.set_shirt(SHIRT[f["tshirt_colour"]])
+        self.belt.apply(data, f["seat_belt"] == "YES")
+        self.phone_hand = None
+        if "phone_centre" in data:   # the phone lies in the posed palm, turned as the rig's position says
+            self.phone_hand = (Vector(data["phone_centre"].tolist()), f["phone_position"])
+
+    def hide(self) -> None:
+        self.person.show(False)
+        self.belt.hide()
+        self.slide_seat(0.0)
+        self.phone_hand = None
+
+    def hand_pose(self):
+        """(phone centre, phone position) when a hand holds the phone, else None."""
+        return self.phone_hand
+
+
+class Child:
+    def __init__(self, coll):
+        self.person = Person("child", coll, INSTANCE_ID["child"], INSTANCE_ID["child"])
+
+    def apply(self, spec: dict | None) -> None:
+        if spec is None:
+            self.person.show(False)
+            return
+        self.person.set(spec["topology"], spec["state"])
+
+
+class _Belt:
+    """Shoulder and lap strap laid on the body by the host; a retracted strap hangs on the B-pillar."""
+
+    def __init__(self, hw: dict, coll):
+        self.hw = {k: Vector(v) for k, v in hw.items()}
+        self.mat = M.material("belt", BELT, roughness=0.6)
+        self.worn = [self._obj(n, coll, INSTANCE_ID["seat_belt"]) for n in ("belt_shoulder", "belt_lap")]
+        # an unused belt is part of the car: its mask class is cabin, so "seat_belt" means worn
+        self.retracted = self._obj("belt_retracted", coll, INSTANCE_ID["cabin"])
+        up = self.hw["upper_anchor"]
+        pts = [up, up - Vector((0.0, 0.0, 0.38))]
+        self.retracted.data = M.ribbon_mesh("belt_retracted", pts, [0.048] * 2, [Vector((0, -1, 0))] * 2)
+        self.key = None
+
+    def _obj(self, name, coll, pid):
+        obj = bpy.data.objects.new(name, bpy.data.meshes.new(name))
+        obj.data.materials.append(self.mat)
+        obj.pass_index = pid
+        coll.objects.link(obj)
+        return obj
+
+    def hide(self) -> None:
+        for obj in [*self.worn, self.retracted]:
+            obj.hide_render = True
+
+    def apply(self, data: dict, worn: bool) -> None:
+        for obj in self.worn:
+            obj.hide_render = not worn
+        self.retracted.hide_render = worn
+        if not worn:
+            return
+        for obj, strap in zip(self.worn, ("belt_diagonal", "belt_lap")):
+            points, normals = data[strap], data[f"{strap}_normals"]
+            M.ribbon_mesh(obj.data.name, [Vector(p) for p in points.tolist()], [0.048] * len(points),
+                          [Vector(n) for n in normals.tolist()])

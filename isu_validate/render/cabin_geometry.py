@@ -1,0 +1,124 @@
+"""Solid shapes of the procedural cabin that people touch (seats, steering wheel), in the cabin frame,
+with signed distances: the Blender builder makes its meshes from them, the people's posing sits
+bodies on them, and tests measure interpenetration against them. No bpy here."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Box:
+    """An oriented box: centre, full size along its local axes, rotation (columns = local axes)."""
+    name: str
+    centre: tuple
+    size: tuple
+    R: np.ndarray
+    rounded: float = 0.0     # bevel as a share of the unit cube (the rendered box lies inside this one)
+
+    def sdf(self, points: np.ndarray) -> np.ndarray:
+        """Signed distance (m) of each point to the (sharp) box: negative inside."""
+        local = (np.asarray(points, float) - np.asarray(self.centre)) @ self.R
+        q = np.abs(local) - np.asarray(self.size) / 2
+        outside = np.linalg.norm(np.maximum(q, 0.0), axis=-1)
+        return outside + np.minimum(q.max(axis=-1), 0.0)
+
+    def push_out(self, points: np.ndarray, axis: int, gap: float) -> float:
+        """How far to move the points along the box's local axis ``axis`` (positive direction) for all of
+        them to clear its face on that side by ``gap`` (0 when none is closer than ``gap``)."""
+        points = np.asarray(points, float)
+        near = self.sdf(points) < gap
+        if not near.any():
+            return 0.0
+        local = (points[near] - np.asarray(self.centre)) @ self.R
+        return float(max(0.0, (self.size[axis] / 2 + gap - local[:, axis]).max()))
+
+
+@dataclass(frozen=True)
+class Torus:
+    """The steering wheel's rim: centre, unit normal of its plane, major and tube radius."""
+    name: str
+    centre: np.ndarray
+    normal: np.ndarray
+    radius: float
+    tube: float
+
+    def sdf(self, points: np.ndarray) -> np.ndarray:
+        q = np.asarray(points, float) - self.centre
+        h = q @ self.normal
+        radial = np.linalg.norm(q - h[..., None] * self.normal, axis=-1)
+        return np.hypot(radial - self.radius, h) - self.tube
+
+
+@dataclass(frozen=True)
+class Capsule:
+    """A cylinder with round ends (spokes, hub, column: conservative stand-ins for their shapes)."""
+    name: str
+    a: np.ndarray
+    b: np.ndarray
+    radius: float
+
+    def sdf(self, points: np.ndarray) -> np.ndarray:
+        p = np.asarray(points, float)
+        ab = self.b - self.a
+        t = np.clip(((p - self.a) @ ab) / (ab @ ab), 0.0, 1.0)
+        return np.linalg.norm(p - (self.a + t[..., None] * ab), axis=-1) - self.radius
+
+
+def rot_y(angle_rad: float) -> np.ndarray:
+    c, s = math.cos(angle_rad), math.sin(angle_rad)
+    return np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
+
+
+RIM_TUBE = 0.12   # tube radius of the rim as a share of the wheel's radius
+
+
+def seat_boxes(name: str, seat: dict) -> list[Box]:
+    """Cushion, base, tilted backrest and headrest(s) from the rig's cushion top-centre point."""
+    cx, cy, cz = seat["cushion"]
+    w, d, bh = seat["width"], seat["depth"], seat["back_height"]
+    tilt = math.radians(seat["back_tilt_deg"])
+    R = rot_y(-tilt)
+    back_base = np.array([cx - d / 2 + 0.05, cy, cz])
+    back_dir = np.array([-math.sin(tilt), 0, math.cos(tilt)])
+    back_centre = back_base + back_dir * (bh / 2) + np.array([-0.06, 0, 0])
+    boxes = [Box(f"{name}_cushion", (cx, cy, cz - 0.07), (d, w, 0.14), np.eye(3), 0.18),
+             Box(f"{name}_base", (cx, cy, (cz - 0.14) / 2), (d * 0.8, w * 0.8, cz - 0.14), np.eye(3)),
+             Box(f"{name}_back", tuple(back_centre), (0.13, w, bh), R, 0.18)]
+    heads = [cy] if w < 0.8 else [cy - w / 3, cy + w / 3, cy]
+    for i, hy in enumerate(heads):
+        top = back_base + back_dir * (bh + 0.1) + np.array([-0.07, hy - cy, 0])
+        boxes.append(Box(f"{name}_headrest{i}", tuple(top), (0.1, 0.26, 0.18), R, 0.3))
+    return boxes
+
+
+def wheel_frame(wheel: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(centre, lateral axis, up-in-rim-plane axis, normal towards the driver) of the steering wheel."""
+    tilt = math.radians(wheel["tilt_deg"])
+    return (np.asarray(wheel["centre"], float), np.array([0.0, 1.0, 0.0]),
+            np.array([-math.sin(tilt), 0.0, math.cos(tilt)]), np.array([-math.cos(tilt), 0.0, -math.sin(tilt)]))
+
+
+def wheel_solids(wheel: dict) -> list:
+    """Rim, hub, spokes and column of the steering wheel, as built by the Blender cabin."""
+    centre, e_y, e_up, normal = wheel_frame(wheel)
+    r = wheel["radius"]
+    solids = [Torus("wheel_rim", centre, normal, r, r * RIM_TUBE),
+              Capsule("wheel_hub", centre - normal * 0.03, centre + normal * 0.03, r * 0.35),
+              Capsule("wheel_column", centre - normal * 0.02, centre - normal * 0.3, 0.04)]
+    for k, ang in enumerate((90, 270, 180)):
+        a = math.radians(ang)
+        solids.append(Capsule(f"wheel_spoke{k}", centre, centre + (e_y * math.cos(a) + e_up * math.sin(a)) * r, 0.03))
+    return solids
+
+
+def rim_point(wheel: dict, clock_deg: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A point on the rim's centre line at an angle from 3 o'clock (counter-clockwise as the driver
+    sees it, towards +y = the driver's left), with the rim's tangent there and the outward radial."""
+    centre, e_y, e_up, _ = wheel_frame(wheel)
+    a = math.radians(clock_deg)
+    radial = -e_y * math.cos(a) + e_up * math.sin(a)     # 3 o'clock is the driver's right (-y)
+    tangent = e_y * math.sin(a) + e_up * math.cos(a)
+    return centre + radial * wheel["radius"], tangent, radial

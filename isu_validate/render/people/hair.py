@@ -1,0 +1,123 @@
+"""Simple hair: a shell over the scalp, lifted off the posed head along its normals.
+
+anny ships no hair. A style is a set of scalp vertices (chosen on the standing rest body by a hairline
+that runs round the head) and a thickness per vertex; the shell's triangles are anny's own between
+those vertices, so the hair follows every pose and face without a separate rig. Short hair (men, the
+child) stays close to the head and ends at the ears and the nape; the women's bob covers the ears and
+the nape and flares out towards its lower edge, so hair length differs by gender while the bodies and
+faces differ too (hair is not the only cue)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .skeleton import Posed
+
+# hairline height above the eyes (share of a 1.75 m adult's size) against the cosine of the angle
+# from the face's direction round the head: 1 = the forehead, 0 = above the ears, -1 = the nape
+_HAIRLINES = {
+    "short": ((-1.0, -0.060), (0.0, 0.012), (0.35, 0.022), (1.0, 0.052)),
+    "bob": ((-1.0, -0.170), (-0.3, -0.125), (0.2, -0.095), (0.45, 0.020), (1.0, 0.045)),
+}
+
+
+PAINTED = 0.004   # the hair colour is painted on the scalp this far (m) beyond the shell's edge
+
+
+@dataclass(frozen=True)
+class HairStyle:
+    """A hair shell: each of its vertices lies on the body between anny vertices ``i`` and ``j`` (at
+    ``t`` from i; i == j inside the scalp), lifted ``thickness`` off the skin."""
+    name: str
+    i: np.ndarray
+    j: np.ndarray
+    t: np.ndarray
+    faces: np.ndarray        # triangles, indexing the shell's vertices
+    thickness: np.ndarray    # per shell vertex (m)
+    field: np.ndarray        # per anny vertex: height above the hairline (m), > 0 on the scalp
+
+
+def hair_style(rest: Posed, faces: np.ndarray, candidates: np.ndarray, name: str, scale_thickness: float = 1.0
+               ) -> HairStyle:
+    """The style ``name`` ("short" or "bob") on a rest body; ``candidates`` marks vertices that may
+    carry hair (head and neck). The shell is cut exactly along its edge line (not along anny's
+    triangles), a little inside the painted hairline, so its rim is as smooth as the hairline."""
+    v = rest.vertices.astype(np.float64)
+    eyes = (rest.head("eye.L") + rest.head("eye.R")) / 2
+    s = (eyes[2] - rest.head("root")[2]) / 0.69
+    centre = eyes + np.array([0.0, 0.075 * s, 0.0])     # the body faces -Y at rest
+    d = v - centre
+    cos_front = -d[:, 1] / np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-9)
+    knots = np.array(_HAIRLINES[name])
+    hairline = eyes[2] + s * np.interp(cos_front, knots[:, 0], knots[:, 1])
+    above = (v[:, 2] - hairline) / s
+    # taper to nothing at the hairline where it meets the face; the lower edge of a bob stays thick
+    taper = np.clip((above - PAINTED) / 0.015, 0.0, 1.0)
+    if name == "bob":
+        base = 0.012 + 0.035 * np.clip((eyes[2] - v[:, 2]) / (0.12 * s), 0.0, 1.0)
+        taper = np.where(cos_front > 0.3, taper, 1.0)
+    else:
+        base = np.full(len(v), 0.007)
+    thickness = base * s * taper * scale_thickness
+    edge = np.where(candidates, above - PAINTED, -1.0)            # > 0 under the shell
+    i, j, t, shell = _clip(faces, edge)
+    return HairStyle(name, i, j, t, shell, ((1 - t) * thickness[i] + t * thickness[j]).astype(np.float32),
+                     np.where(candidates, above * s, -1.0).astype(np.float32))
+
+
+def _clip(faces: np.ndarray, f: np.ndarray):
+    """The part of a triangle mesh where the vertex field f > 0, cut along f = 0 (winding kept).
+    Returns the new vertices as (i, j, t) points on anny's edges, and the triangles."""
+    points: dict[tuple[int, int], int] = {}
+    spec: list[tuple[int, int, float]] = []
+
+    def vertex(a: int) -> int:
+        return _point(points, spec, (a, a), (a, a, 0.0))
+
+    def crossing(a: int, b: int) -> int:      # where f changes sign on edge a-b (a inside)
+        lo, hi = min(a, b), max(a, b)
+        t = f[lo] / (f[lo] - f[hi])
+        return _point(points, spec, (lo, hi), (lo, hi, float(t)))
+
+    inside = f[faces] > 0
+    out = []
+    for tri, pos in zip(faces[inside.any(axis=1)], inside[inside.any(axis=1)]):
+        if pos.all():
+            out.append([vertex(a) for a in tri])
+            continue
+        k = int(np.flatnonzero(pos)[0]) if pos.sum() == 1 else int(np.flatnonzero(~pos)[0])
+        a, b, c = np.roll(tri, -k)             # the odd one out first, winding kept
+        if pos.sum() == 1:                      # a inside: a triangle
+            out.append([vertex(a), crossing(a, b), crossing(a, c)])
+        else:                                   # a outside: a quad b, c and the two crossings
+            ab, ac = crossing(b, a), crossing(c, a)
+            out += [[ab, vertex(b), vertex(c)], [ab, vertex(c), ac]]
+    i, j, t = (np.array(col) for col in zip(*spec))
+    return i.astype(np.int32), j.astype(np.int32), t.astype(np.float32), np.array(out, np.int32)
+
+
+def _point(points: dict, spec: list, key, value) -> int:
+    if key not in points:
+        points[key] = len(spec)
+        spec.append(value)
+    return points[key]
+
+
+def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Area-weighted vertex normals of a triangle mesh."""
+    tri = vertices[faces]
+    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    out = np.zeros_like(vertices)
+    for k in range(3):
+        np.add.at(out, faces[:, k], n)
+    return out / np.maximum(np.linalg.norm(out, axis=1, keepdims=True), 1e-12)
+
+
+def hair_vertices(style: HairStyle, vertices: np.ndarray, normals: np.ndarray) -> np.ndarray:
+    """The hair shell's vertices on a posed body."""
+    t = style.t[:, None]
+    skin = (1 - t) * vertices[style.i] + t * vertices[style.j]
+    normal = (1 - t) * normals[style.i] + t * normals[style.j]
+    normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-12)
+    return (skin + normal * style.thickness[:, None]).astype(np.float32)

@@ -1,0 +1,187 @@
+"""The host side of the people: for a scene, the files the Blender worker swaps into its persistent
+person meshes (a topology per kind of person, a posed state per body, pose and expression).
+
+Everything is looked up in the on-disk store first; only a miss loads anny (about 0.9 GB, once per
+process) and poses the body (IK, seat fit, belt) - the pose without the face once per body and phone
+position, the face per expression on top of it."""
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import time
+
+import numpy as np
+
+from . import belt, child, expressions, hair, regions, seated
+from .model import load_model
+from .phenotype import child_phenotype, driver_phenotype
+from .skeleton import Body
+from .store import PeopleStore, entry_key
+
+KINDS = ("male", "female", "child")
+JOINTS = ("root", "spine01", "neck01", "head")    # bone heads a state keeps (for measuring a pose)
+HAIR_STYLE = {"male": "short", "female": "bob", "child": "short"}
+
+
+def rig_part_hash(cabin: dict, parts: tuple[str, ...]) -> str:
+    """Identifies the parts of a cabin rig a pose depends on (seats, wheel, belt hardware...)."""
+    content = {p: _dig(cabin, p) for p in parts}
+    return hashlib.sha256(json.dumps(content, sort_keys=True, default=str).encode()).hexdigest()[:16]
+
+
+_DRIVER_RIG = ("seats.driver", "steering_wheel", "seat_belt", "phone_positions")
+_CHILD_RIG = ("anchors.child_seat",)
+
+
+class People:
+    def __init__(self, cabin: dict, store: PeopleStore | None = None):
+        self.cabin, self.store = cabin, store or PeopleStore()
+        self.driver_rig = rig_part_hash(cabin, _DRIVER_RIG)
+        self.child_rig = rig_part_hash(cabin, _CHILD_RIG)
+        self.misses = 0           # entries posed by this process (each a miss of the store)
+        self.last_miss_s = 0.0
+
+    # ------------------------------------------------------------------ what the worker gets
+    def for_scene(self, f: dict, with_driver: bool = True) -> dict:
+        """{"driver": {...} | None, "child": {...} | None}: topology and state files for the worker."""
+        out = {"driver": None, "child": None}
+        if with_driver:
+            kind = "female" if f["driver_gender"] == "FEMALE" else "male"
+            out["driver"] = {"topology": str(self.topology(kind)),
+                             "state": str(self.driver_state(f["driver_gender"], f["driver_height"], f["driver_weight"],
+                                                            f["driver_emotion"], f["phone_position"])),
+                             "kind": kind}
+        if f.get("child_seat") == "YES" and f.get("child") == "YES":
+            front = f["child_seat_orientation"] == "FRONT_FACING"
+            out["child"] = {"topology": str(self.topology("child")), "state": str(self.child_state(front)),
+                            "kind": "child", "front_facing": front}
+        return out
+
+    # ------------------------------------------------------------------ entries
+    def topology(self, kind: str):
+        key = entry_key("topology", {"person": kind})
+        found = self.store.get("topology", key)
+        if found:
+            return found
+        with _timed(self):
+            return self.store.put("topology", key, _topology(kind))
+
+    def driver_state(self, gender: str, height: str, weight: str, emotion: str, phone_position: str):
+        inputs = {"rig": self.driver_rig, "gender": gender, "height": height, "weight": weight,
+                  "emotion": emotion, "phone_position": phone_position}
+        key = entry_key("driver", inputs)
+        found = self.store.get("driver", key)
+        if found:
+            return found
+        with _timed(self):
+            pose = self._driver_pose(gender, height, weight, phone_position)
+            kind = "female" if gender == "FEMALE" else "male"
+            topo = _load_npz(self.topology(kind))
+            body = Body(load_model(), driver_phenotype(gender, height, weight), expressions.facial_actions(emotion))
+            posed = body.evaluate(_deltas_from(pose))
+            state = {**_surface_state(posed, topo), **{k: pose[k] for k in pose if not k.startswith("d_")}}
+            return self.store.put("driver", key, state)
+
+    def child_state(self, front_facing: bool):
+        key = entry_key("child", {"rig": self.child_rig, "front_facing": front_facing})
+        found = self.store.get("child", key)
+        if found:
+            return found
+        with _timed(self):
+            topo = _load_npz(self.topology("child"))
+            body = Body(load_model(), child_phenotype("FRONT_FACING" if front_facing else "REAR_FACING"),
+                        expressions.facial_actions("NEUTRAL"))
+            posed = child.pose_child(body, front_facing, self.cabin["anchors"]["child_seat"])
+            return self.store.put("child", key, _surface_state(posed, topo))
+
+    def _driver_pose(self, gender, height, weight, phone_position) -> dict:
+        """The expression-free pose (bone deltas), belt straps and phone placement of a driver."""
+        key = entry_key("driver-pose", {"rig": self.driver_rig, "gender": gender, "height": height,
+                                        "weight": weight, "phone_position": phone_position})
+        found = self.store.load("driver-pose", key)
+        if found:
+            return found
+        model = load_model()
+        body = Body(model, driver_phenotype(gender, height, weight))
+        dp = seated.seat_and_pose(body, self.cabin, phone_position)
+        faces = model.faces.cpu().numpy()
+        hardware = dict(self.cabin["seat_belt"])
+        for part in ("buckle", "lap_anchor"):     # mounted on the seat: they slide with it
+            hardware[part] = np.asarray(hardware[part], float) + np.array([dp.seat_shift, 0.0, 0.0])
+        diagonal, lap = belt.lay_belt(dp.posed, faces, belt.carrier_mask(model), hardware)
+        record = {f"d_{bone}": m for bone, m in dp.deltas.items()}
+        record["seat_shift"] = np.float32(dp.seat_shift)
+        record.update(belt_diagonal=diagonal.points, belt_diagonal_normals=diagonal.normals,
+                      belt_lap=lap.points, belt_lap_normals=lap.normals,
+                      head_centre=dp.head_centre.astype(np.float32))
+        if dp.phone is not None:
+            record.update(phone_centre=dp.phone[0].astype(np.float32), phone_rotation=dp.phone[1].astype(np.float32))
+        self.store.put("driver-pose", key, record)
+        return record
+
+
+# ---------------------------------------------------------------------- helpers
+def _topology(kind: str) -> dict:
+    """Triangles, per-corner UVs, material slot and head flag per triangle, garment fields per vertex,
+    and the hair style."""
+    model = load_model()
+    faces = model.faces.cpu().numpy().astype(np.int32)
+    if kind == "child":
+        body = Body(model, child_phenotype())
+        fields = regions.child_fields(body)
+    else:
+        body = Body(model, driver_phenotype("FEMALE" if kind == "female" else "MALE", "H3", "W2"))
+        fields = regions.adult_fields(body, female=kind == "female")
+    rest = body.evaluate({})
+    candidates = regions.bone_weights(model, ("head", "neck")) > 0.5
+    style = hair.hair_style(rest, faces, candidates, HAIR_STYLE[kind], 0.6 if kind == "child" else 1.0)
+    uv = model.texture_coordinates[model.face_texture_coordinate_indices].cpu().numpy().reshape(-1, 2)
+    return {"faces": faces, "uv": uv.astype(np.float32), "slots": regions.slots(model),
+            "head": regions.head_mask(model, faces), "slot_names": np.array(regions.SLOTS),
+            **{f"field_{k}": v.astype(np.float32) for k, v in fields.items()}, "field_scalp": style.field,
+            "lips_mask": np.array(str(regions.lips_mask_path())),
+            "hands": regions.bone_weights(model, ("wrist", "finger", "metacarpal")) > 0.5,
+            "carriers": belt.carrier_mask(model),
+            "hair_i": style.i, "hair_j": style.j, "hair_t": style.t, "hair_faces": style.faces,
+            "hair_thickness": style.thickness}
+
+
+def _surface_state(posed, topo: dict) -> dict:
+    """What the worker swaps in: the body's vertices and its hair shell; and a few joints (JOINTS)."""
+    vertices = posed.vertices
+    normals = hair.vertex_normals(vertices.astype(np.float64), topo["faces"])
+    style = hair.HairStyle("", topo["hair_i"], topo["hair_j"], topo["hair_t"], topo["hair_faces"],
+                           topo["hair_thickness"], topo["field_scalp"])
+    return {"vertices": vertices.astype(np.float32), "hair": hair.hair_vertices(style, vertices, normals),
+            "joints": np.array([posed.head(b) for b in JOINTS], np.float32)}
+
+
+def _deltas_from(record: dict) -> dict:
+    return {k[2:]: record[k] for k in record if k.startswith("d_")}
+
+
+def _load_npz(path) -> dict:
+    with np.load(path, allow_pickle=False) as data:
+        return {k: data[k] for k in data.files}
+
+
+def _dig(d: dict, dotted: str):
+    for part in dotted.split("."):
+        d = d.get(part, {}) if isinstance(d, dict) else {}
+    return d
+
+
+@contextlib.contextmanager
+def _timed(people: People):
+    """Count a miss; pose single-threaded (torch's two threads only fight on a shared machine)."""
+    import torch
+    people.misses += 1
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    t = time.perf_counter()
+    try:
+        yield
+    finally:
+        torch.set_num_threads(threads)
+        people.last_miss_s = time.perf_counter() - t

@@ -1,0 +1,250 @@
+"""The driver's pose in the cabin rig: seated on the driver's seat (resting on the cushion and the
+backrest, clear of both; the seat slid on its track until the wheel is in reach), feet towards the pedals, hands on the steering wheel at ten and two, or
+one hand holding the phone at one of the rig's phone positions P1-P10 (reached by inverse kinematics,
+the phone placed in the posed palm).
+
+anny's frame (Z up, the body faces -Y, its left is +X) is turned into the cabin's (x forward, y left,
+z up) by the root bone's world pose, so every joint is solved directly in cabin coordinates."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..cabin_geometry import RIM_TUBE, rim_point, seat_boxes, wheel_frame, wheel_solids
+from .hands import HandFrame, curl, hand_frame, turn_to, wrap
+from .limbs import Limb, reach
+from .regions import bone_weights
+from .skeleton import Body, Posed, align, rigid, rot_x, rot_z, rotation
+
+GAP = 0.004              # clearance between the body and the seat it rests on (m)
+RECLINE_DEG = 14.0       # the torso leans back with the backrest (17 deg): a little upright of it
+GRIP_CLOCK = {"L": 150.0, "R": 30.0}   # ten and two: angles from three o'clock
+GRIP_CURL = (55.0, 60.0, 45.0)         # finger joints bent towards the rim before wrapping (degrees)
+PHONE_CURL = (20.0, 25.0, 15.0)        # fingers bent round a phone's edges
+PALM_HALF = 0.014                      # from the hand's axis to the palm's surface (m)
+GRIP_PALM = 0.036                      # the hand's axis this far off the rim's surface (m)
+GRIP_ALONG = 0.55                      # the rim crosses the hand this far from wrist to knuckles
+SKIN_GAP = 0.016                       # finger joints wrap this far outside the rim (half a finger's thickness)
+ANKLE_HEIGHT = 0.11      # ankle joints above the floor (heels on it)
+PEDAL_X = 0.56           # feet no further forward than the pedals (the footwell ends at the dashboard)
+PHONE_THICKNESS = 0.009
+SIDE = {"left": "L", "right": "R"}      # the driver's left hand is anny's .L (towards cabin +y)
+SEAT_TRACK = (-0.08, 0.22)   # the seat slides this far back/forward to fit the driver (m)
+REACH = 0.86                 # shoulder to palm at this share of the arm's length: elbows a little bent
+
+
+@dataclass
+class DriverPose:
+    posed: Posed
+    deltas: dict
+    phone: tuple[np.ndarray, np.ndarray] | None      # (centre, 3x3 rotation) of the phone in the hand
+    head_centre: np.ndarray
+    seat_shift: float     # how far the seat was slid forward on its track (m)
+
+
+def anny_to_cabin() -> np.ndarray:
+    """anny forward (-Y) -> cabin +x, anny left (+X) -> cabin +y."""
+    return rot_z(90.0)
+
+
+def seat_and_pose(body: Body, rig: dict, phone_position: str = "NONE") -> DriverPose:
+    """Seat the body, slide the seat on its track until the wheel is in reach, then place the hands."""
+    shift = 0.0
+    for _ in range(2):    # sliding the seat can move the driver on the cushion: measure again once
+        deltas, rest = _sit(body, rig, shift)
+        shift = float(np.clip(shift + _track_shift(rest, rig), *SEAT_TRACK))
+    deltas, rest = _sit(body, rig, shift)
+    head_centre = _head_centre(rest)
+    grips = {side: _wheel_grip(rest, side, rig) for side in ("L", "R")}
+    spec = rig["phone_positions"].get(phone_position)
+    if spec:
+        grips[SIDE[spec["hand"]]] = _phone_grip(rest, SIDE[spec["hand"]], spec, rig, head_centre)
+    for _ in range(2):   # anny's twist bones sit a few mm off the arm's axis: correct by the measured miss
+        arm = {}
+        for side, grip in grips.items():
+            arm.update(_arm(rest, side, grip))
+        posed = body.evaluate({**deltas, **arm})
+        for side, grip in grips.items():
+            grip.palm_target = grip.palm_target + grip.palm_target - hand_frame(posed, side).palm(grip.along)
+    # hands on the wheel close round the rim, measured on the posed hand with straight fingers
+    straight = body.evaluate({**deltas, **{b: m for b, m in arm.items() if not b.startswith("finger")}})
+    for side, grip in grips.items():
+        if grip.on_wheel:
+            point, tangent, _ = rim_point(rig["steering_wheel"], GRIP_CLOCK[side])
+            arm.update(wrap(straight, side, point, tangent, rig["steering_wheel"]["radius"] * RIM_TUBE + SKIN_GAP))
+    posed = body.evaluate({**deltas, **arm})
+    phone = _phone_in(hand_frame(posed, SIDE[spec["hand"]]), spec) if spec else None
+    return DriverPose(posed, {**deltas, **arm}, phone, head_centre, shift)
+
+
+def shifted_seat(seat: dict, shift: float) -> dict:
+    """The driver's seat slid ``shift`` metres forward on its track."""
+    cx, cy, cz = seat["cushion"]
+    return {**seat, "cushion": [cx + shift, cy, cz]}
+
+
+def _sit(body: Body, rig: dict, shift: float) -> tuple[dict, Posed]:
+    """Torso and legs seated on the (shifted) seat: resting on the cushion and against the backrest."""
+    seat = shifted_seat(rig["seats"]["driver"], shift)
+    boxes = {b.name.split("_", 2)[-1]: b for b in seat_boxes("driver_seat", seat)}
+    base = _torso(RECLINE_DEG)
+    turn = anny_to_cabin() @ rot_x(-RECLINE_DEG)
+    t = np.array([seat["cushion"][0] - 0.12, seat["cushion"][1], seat["cushion"][2] + 0.10])
+    lower_legs = bone_weights(body.model, ("lowerleg", "foot", "toe")) > 0.5
+    for _ in range(4):   # legs follow the hips, the hips rest on what the legs leave: settle in turns
+        deltas = {**base, "root": rigid(turn, t)}
+        deltas.update(_legs(body.evaluate(deltas), rig))
+        t = t + _settle(body.evaluate(deltas).vertices, boxes, lower_legs)
+    deltas = {**base, "root": rigid(turn, t)}
+    deltas.update(_legs(body.evaluate(deltas), rig))
+    return deltas, body.evaluate(deltas)
+
+
+def _track_shift(rest: Posed, rig: dict) -> float:
+    """How far forward the seat must slide for both palms to reach their grips at REACH of the arm."""
+    need = -np.inf
+    for side in ("L", "R"):
+        S, E, W = (rest.head(f"{b}.{side}") for b in ("upperarm01", "lowerarm01", "wrist"))
+        arm = np.linalg.norm(E - S) + np.linalg.norm(W - E) + GRIP_ALONG * hand_frame(rest, side).length
+        grip = _wheel_grip(rest, side, rig).palm_target
+        d = grip - S
+        along = np.sqrt(max((REACH * arm) ** 2 - d[1] ** 2 - d[2] ** 2, 0.0))
+        need = max(need, d[0] - along)
+    return float(need)
+
+
+# ---------------------------------------------------------------------- torso, legs, seat
+SLUMP_DEG = 10.0   # the upper back rounds forward this much over three vertebrae
+
+
+def _torso(recline: float) -> dict:
+    """Spine and neck: a slight slump of the upper back, the neck bringing the head back level, eyes
+    on the road (the rest of the recline taken out over neck and head)."""
+    level = recline - SLUMP_DEG
+    d = {"spine03": rot_x(0.4 * SLUMP_DEG), "spine02": rot_x(0.4 * SLUMP_DEG), "spine01": rot_x(0.2 * SLUMP_DEG),
+         "neck01": rot_x(0.5 * level), "neck02": rot_x(0.3 * level), "head": rot_x(0.2 * level)}
+    return {bone: rigid(R) for bone, R in d.items()}
+
+
+def _legs(rest: Posed, rig: dict) -> dict:
+    """Both legs from the hips to ankles above the floor towards the pedals, knees up, feet forward."""
+    deltas = {}
+    for side in ("L", "R"):
+        limb = Limb.leg(side)
+        hip = rest.head(limb.upper)
+        l1 = np.linalg.norm(rest.head(limb.lower) - hip)
+        l2 = np.linalg.norm(rest.head(limb.end) - rest.head(limb.lower))
+        dz = hip[2] - ANKLE_HEIGHT
+        forward = math.sqrt(max((0.9 * (l1 + l2)) ** 2 - dz * dz, 0.05))
+        ankle = np.array([min(hip[0] + forward, PEDAL_X), hip[1] + (0.03 if side == "L" else -0.03), ANKLE_HEIGHT])
+        foot_dir = rest.head(f"toe3-1.{side}") - rest.head(f"foot.{side}")
+        Z = align(foot_dir, np.array([0.0, 1.0, 0.0]), np.array([0.9, 0.0, -0.42]), np.array([0.0, 1.0, 0.0]))
+        deltas.update(reach(limb, rest, ankle, pole=np.array([1.0, 0.0, 1.0]),
+                            end_rotation=Z @ rest.rot(limb.end)))
+    return deltas
+
+
+def _settle(vertices: np.ndarray, boxes: dict, lower_legs: np.ndarray) -> np.ndarray:
+    """The shift that puts the body GAP above the cushion and GAP in front of the backrest/headrest.
+    Calves that would cut into the cushion's front (a short driver on a deep cushion) move the driver
+    forward on the cushion, away from the backrest, rather than lifting the whole body."""
+    cushion, back = boxes["cushion"], boxes["back"]
+    rests = [b for name, b in boxes.items() if name == "back" or name.startswith("headrest")]
+    upper = vertices[~lower_legs]
+    dz = GAP - cushion.sdf(upper).min()
+    normal = back.R[:, 0]                                  # the backrest's front normal
+    lifted = vertices + np.array([0.0, 0.0, dz])
+    dx = (GAP - min(b.sdf(lifted).min() for b in rests)) / normal[0]
+    calves = lifted[lower_legs] + np.array([dx, 0.0, 0.0])
+    dx += cushion.push_out(calves, 0, GAP)
+    return np.array([dx, 0.0, dz])
+
+
+def _head_centre(posed: Posed) -> np.ndarray:
+    """Centre of the head: midway between the ears, at eye level, a little behind the eyes."""
+    eyes = (posed.head("eye.L") + posed.head("eye.R")) / 2
+    return eyes + np.array([-0.07, 0.0, -0.01])
+
+
+# ---------------------------------------------------------------------- hands and arms
+@dataclass
+class Grip:
+    """Where a hand goes: a point on the hand's axis (``along`` its length from the wrist) to put at
+    ``palm_target``, the hand's wanted world rotation delta, its turned frame, the finger curl."""
+    palm_target: np.ndarray
+    G_hand: np.ndarray
+    a: np.ndarray
+    t: np.ndarray
+    p: np.ndarray
+    along: float
+    fingers: tuple[float, float, float]
+    on_wheel: bool
+
+
+def _wheel_grip(rest: Posed, side: str, rig: dict) -> Grip:
+    """A fist round the rim at ten (left hand) or two (right hand): the knuckle line along the rim,
+    the palm against its outer side, fingers wrapping to the front (closed round it by ``wrap``)."""
+    point, tangent, radial = rim_point(rig["steering_wheel"], GRIP_CLOCK[side])
+    _, _, _, normal = wheel_frame(rig["steering_wheel"])
+    a = _unit(-normal * 0.75 - radial * 0.35)          # from the wrist over the rim towards the dashboard
+    a = _unit(a - tangent * (a @ tangent))
+    p = _unit(np.cross(a, tangent))
+    if p @ (-radial) < 0:                               # the palm faces the wheel's centre
+        p = -p
+    tube = rig["steering_wheel"]["radius"] * RIM_TUBE
+    return _grip(rest, side, a, p, point - p * (tube + GRIP_PALM), GRIP_ALONG, GRIP_CURL, True)
+
+
+def _phone_grip(rest: Posed, side: str, spec: dict, rig: dict, head_centre: np.ndarray) -> Grip:
+    """The palm flat on the phone's back, the hand pointing away from the shoulder."""
+    R = _euler_xyz(spec["rotation_deg"])
+    xp, yp, zp = R[:, 0], R[:, 1], R[:, 2]
+    ref = {"head": head_centre,
+           "shoulder": (rest.head("upperarm01.L") + rest.head("upperarm01.R")) / 2,
+           "wheel": np.asarray(rig["steering_wheel"]["centre"], float)}[spec["relative_to"]]
+    centre = ref + np.asarray(spec["offset"], float)
+    away = _unit(centre - rest.head(f"upperarm01.{side}"))
+    a = max((xp, -xp, yp, -yp), key=lambda v: v @ away)
+    return _grip(rest, side, a, zp, centre - zp * (PHONE_THICKNESS / 2 + PALM_HALF), 0.5, PHONE_CURL, False)
+
+
+def _grip(rest, side, a, p, palm_target, along, fingers, on_wheel) -> Grip:
+    frame = hand_frame(rest, side)
+    Z = turn_to(frame, a, p)
+    return Grip(palm_target, Z @ rest.rot(f"wrist.{side}"), Z @ frame.a, Z @ frame.t, Z @ frame.p, along,
+                fingers, on_wheel)
+
+
+def _arm(rest: Posed, side: str, grip: Grip) -> dict:
+    wrist_target = grip.palm_target - grip.a * (grip.along * hand_frame(rest, side).length)
+    outward = 1.0 if side == "L" else -1.0
+    pole = np.array([-0.3, 0.7 * outward, -1.0])       # elbows down, a little out and back
+    deltas = reach(Limb.arm(side), rest, wrist_target, pole, end_rotation=grip.G_hand)
+    deltas.update(curl(side, grip.G_hand, grip.a, grip.t, grip.p, grip.fingers, thumb_degrees=20.0))
+    return deltas
+
+
+def _phone_in(frame: HandFrame, spec: dict) -> tuple[np.ndarray, np.ndarray]:
+    """The phone lying on the posed palm, turned as the rig says."""
+    return frame.palm(0.5, PALM_HALF + PHONE_THICKNESS / 2), _euler_xyz(spec["rotation_deg"])
+
+
+# ---------------------------------------------------------------------- helpers
+def _euler_xyz(degrees) -> np.ndarray:
+    """Blender's XYZ Euler rotation (X first, then Y, then Z, about world axes)."""
+    x, y, z = (rotation(axis, math.radians(a)) for axis, a in zip(np.eye(3), degrees))
+    return z @ y @ x
+
+
+def _unit(v) -> np.ndarray:
+    v = np.asarray(v, float)
+    return v / np.linalg.norm(v)
+
+
+def clearances(posed: Posed, rig: dict, seat_shift: float = 0.0) -> dict[str, float]:
+    """The smallest signed distance (m) of the body to each seat box and wheel part (negative: inside)."""
+    seat = shifted_seat(rig["seats"]["driver"], seat_shift)
+    solids = [*seat_boxes("driver_seat", seat), *wheel_solids(rig["steering_wheel"])]
+    return {s.name: float(s.sdf(posed.vertices).min()) for s in solids}

@@ -1,0 +1,160 @@
+"""The people of the renders, with the real anny model (built by setup): bodies land on their
+anthropometric classes, sit on the seat without cutting into it or the wheel, hold the wheel or the
+phone, wear the belt on the body, show their expression only on the face; the child is a toddler in
+its seat; the posed-vertex cache is keyed, reused and never needs anny on a hit."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from isu_validate.render.cabin import load_cabin
+from isu_validate.render.people import People, PeopleStore
+from isu_validate.render.people import people as people_module
+from isu_validate.render.people.checks import child_measures, driver_measures
+from isu_validate.render.people.phenotype import (BMI_BANDS, HEIGHT_BANDS, child_phenotype, describe_texts,
+                                                  measure, measured_table)
+from isu_validate.render.people.store import entry_key
+from isu_validate.space import load_space
+
+pytestmark = pytest.mark.slow
+
+# bodies at the corners of the classes, each with phone positions spread over all ten
+POSES = [("FEMALE", "H1", "W1", "HAPPY", "NONE"), ("MALE", "H4", "W4", "SERIOUS", "NONE"),
+         ("FEMALE", "H1", "W4", "SERIOUS", "P1"), ("MALE", "H4", "W1", "HAPPY", "P2"),
+         ("MALE", "H1", "W2", "SERIOUS", "P3"), ("FEMALE", "H4", "W3", "HAPPY", "P4"),
+         ("MALE", "H2", "W4", "HAPPY", "P5"), ("FEMALE", "H3", "W1", "SERIOUS", "P6"),
+         ("MALE", "H4", "W3", "SERIOUS", "P7"), ("FEMALE", "H2", "W2", "HAPPY", "P8"),
+         ("MALE", "H3", "W1", "HAPPY", "P9"), ("FEMALE", "H4", "W4", "SERIOUS", "P10")]
+HAND_TOUCH = 0.002   # gripping fingers may press 2 mm into the rim's padding (the model's skin tolerance)
+
+
+@pytest.fixture(scope="module")
+def model():
+    from isu_validate.render.people.model import load_model
+    return load_model()
+
+
+@pytest.fixture(scope="module")
+def people(tmp_path_factory):
+    """A fresh cache: every pose here is computed by the code under test, none comes from an old cache."""
+    return People(load_cabin("default"), PeopleStore(tmp_path_factory.mktemp("people")))
+
+
+def _load(path) -> dict:
+    with np.load(path) as data:
+        return {k: data[k] for k in data.files}
+
+
+def test_height_and_weight_classes_land_on_their_anthropometric_bands(model):
+    table = measured_table(model)
+    for (gender, h, w), m in table.items():
+        lo, hi = HEIGHT_BANDS[h]
+        assert lo < m["height_m"] < hi and abs(m["height_m"] - (lo + hi) / 2) < 0.005, (gender, h, w, m)
+        blo, bhi = BMI_BANDS[w]
+        assert blo < m["bmi"] < bhi, (gender, h, w, m)
+    for gender in ("MALE", "FEMALE"):
+        for h in HEIGHT_BANDS:
+            masses = [table[(gender, h, w)]["mass_kg"] for w in BMI_BANDS]
+            assert masses == sorted(masses) and masses[-1] > masses[0] * 1.5, (gender, h, masses)
+    # what the space file tells a technician is what the renderer draws
+    space = load_space()
+    texts = describe_texts(table)
+    for feature in ("driver_height", "driver_weight"):
+        assert dict(space.features[feature].describe) == texts[feature]
+
+
+def test_the_child_is_a_toddler(model):
+    for orientation, (lo, hi) in (("REAR_FACING", (0.72, 0.84)), ("FRONT_FACING", (0.85, 1.0))):
+        height = measure(model, child_phenotype(orientation))["height_m"]
+        assert lo < height < hi, (orientation, height)   # WHO: 1 year ~0.75 m, 2.5 years ~0.91 m
+
+
+@pytest.mark.parametrize("key", POSES, ids=["-".join(k) for k in POSES])
+def test_seated_driver_clears_seat_and_wheel_holds_wheel_or_phone_and_wears_the_belt_on_the_body(people, key):
+    state = _load(people.driver_state(*key))
+    topology = _load(people.topology("female" if key[0] == "FEMALE" else "male"))
+    m = driver_measures(state, topology, people.cabin)
+    for part in ("cushion", "back", "base", "headrest0"):
+        assert m[f"clear_{part}"] >= 0.0, f"{key}: the body cuts {-m[f'clear_{part}'] * 1000:.1f} mm into the {part}"
+    assert m["clear_cushion"] < 0.012, f"{key}: floats {m['clear_cushion'] * 1000:.0f} mm above the cushion"
+    assert m["clear_wheel_body"] >= 0.0, f"{key}: arm or knee {-m['clear_wheel_body'] * 1000:.1f} mm into the wheel"
+    assert m["clear_wheel_hands"] >= -HAND_TOUCH, f"{key}: a hand {-m['clear_wheel_hands'] * 1000:.1f} mm into the wheel"
+    if key[4] in ("NONE", "P3", "P5", "P6", "P9"):   # at least one hand on the rim (both when no phone)
+        assert m["clear_wheel_hands"] < 0.006, f"{key}: no hand touches the wheel"
+    if key[4] != "NONE":
+        assert m["phone_to_palm"] < 0.016, f"{key}: the phone is {m['phone_to_palm'] * 1000:.0f} mm from the hand"
+    # the belt: never through the body, resting on it across the chest and the lap
+    assert m["belt_diagonal_min"] > 0.001 and m["belt_lap_min"] > 0.001, key
+    assert m["belt_diagonal_resting"] > 0.5 and m["belt_lap_resting"] > 0.3, (key, m)
+
+
+def test_expression_moves_only_the_face(people):
+    happy = _load(people.driver_state("MALE", "H2", "W2", "HAPPY", "P6"))
+    serious = _load(people.driver_state("MALE", "H2", "W2", "SERIOUS", "P6"))
+    topology = _load(people.topology("male"))
+    moved = np.linalg.norm(happy["vertices"] - serious["vertices"], axis=1)
+    head_vertices = np.unique(topology["faces"][topology["head"]])
+    body = np.setdiff1d(np.arange(len(moved)), head_vertices)
+    assert moved[body].max() < 0.001 and moved[head_vertices].max() > 0.004   # the chin pulls the neck < 1 mm
+    np.testing.assert_allclose(happy["belt_diagonal"], serious["belt_diagonal"])
+
+
+def test_regions_dress_the_body_and_split_off_the_head(people, model):
+    from isu_validate.render.people.regions import bone_weights
+    topology = _load(people.topology("male"))
+    faces, head = topology["faces"], topology["head"]
+    head_bones = bone_weights(model, ("head",)) > 0.9
+    hand = topology["hands"].astype(bool)
+    assert head[np.isin(faces, np.flatnonzero(head_bones)).all(axis=1)].all()      # all of the head ...
+    assert not head[np.isin(faces, np.flatnonzero(hand)).any(axis=1)].any()        # ... and none of the hands
+    chest = bone_weights(model, ("spine02", "spine01")) > 0.9
+    forearm = bone_weights(model, ("lowerarm",)) > 0.9
+    thigh = bone_weights(model, ("upperleg02",)) > 0.9
+    assert (topology["field_shirt"][chest] > 0).mean() > 0.95
+    assert (topology["field_shirt"][forearm] < 0).all() and (topology["field_shirt"][head_bones] < 0).all()
+    assert (topology["field_trousers"][thigh] > 0).mean() > 0.95 and (topology["field_trousers"][chest] < 0).all()
+    assert (topology["field_brows"] > 0).sum() > 20 and (topology["field_brows"][~head_bones] <= 0).all()
+    # hair: a shell on the scalp; the women's reaches lower than the men's
+    female = _load(people.topology("female"))
+    rest = people_module.Body(model, people_module.driver_phenotype("MALE", "H3", "W2")).evaluate({})
+    assert rest.vertices[female["hair_i"], 2].min() < rest.vertices[topology["hair_i"], 2].min() - 0.05
+
+
+def test_children_sit_in_their_seats_the_rear_facing_one_reclined(people):
+    anchor = people.cabin["anchors"]["child_seat"]
+    for front in (True, False):
+        state = _load(people.child_state(front))
+        for name, value in child_measures(state, front, anchor).items():
+            assert value >= 0.0, f"{'front' if front else 'rear'}-facing child: {name} {value * 1000:.1f} mm"
+    for front, (lo, hi) in ((True, (0, 20)), (False, (40, 75))):
+        joints = dict(zip(people_module.JOINTS, _load(people.child_state(front))["joints"]))
+        axis = joints["neck01"] - joints["root"]
+        lean = np.degrees(np.arctan2(np.hypot(axis[0], axis[1]), axis[2]))
+        assert lo <= lean <= hi, f"{'front' if front else 'rear'}-facing child leans {lean:.0f} deg from upright"
+
+
+def test_the_cache_is_keyed_reused_and_needs_no_anny_on_a_hit(people, monkeypatch, tmp_path):
+    key = ("FEMALE", "H1", "W1", "HAPPY", "NONE")
+    first = people.driver_state(*key)
+    misses = people.misses
+    monkeypatch.setattr(people_module, "load_model", lambda: pytest.fail("anny loaded on a cache hit"))
+    assert people.driver_state(*key) == first and people.misses == misses
+    scene = dict(zip(("driver_gender", "driver_height", "driver_weight", "driver_emotion", "phone_position"), key))
+    spec = people.for_scene({**scene, "child_seat": "NO"})
+    assert spec["driver"]["state"] == str(first) and spec["child"] is None
+    # another cabin (the seat moved) is another entry; nothing half-written is left behind
+    cabin = load_cabin("default")
+    cabin["seats"]["driver"]["cushion"][0] += 0.05
+    moved = People(cabin, people.store)
+    inputs = {"gender": "FEMALE", "height": "H1", "weight": "W1", "emotion": "HAPPY", "phone_position": "NONE"}
+    assert entry_key("driver", {**inputs, "rig": moved.driver_rig}) != entry_key("driver", {**inputs, "rig": people.driver_rig})
+    assert not list(people.store.root.rglob(".tmp-*"))
+
+
+def test_people_commands_warm_and_check_the_cache(people, capsys):
+    from isu_validate.cli import main
+    assert main(["people", "warm", "--limit", "1", "--cache", str(people.store.root)]) == 0
+    assert "1 drivers and 2 children" in capsys.readouterr().out
+    assert main(["people", "check", "--limit", "1", "--cache", str(people.store.root)]) == 0
+    out = capsys.readouterr().out
+    assert "clear_wheel_hands" in out and "belt_lap_resting" in out and "child_rear_clear_cs_platepad" in out
