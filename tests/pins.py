@@ -93,7 +93,8 @@ def reference_isu_values() -> dict:
             features = model.backbone.features([read_rgb(png)])
             images[png.name] = {
                 "answers": dict(sorted(response.answers.items())),
-                "wrong": sorted(q.key for q in request.questions if response.answers.get(q.key) != q.truth),
+                "wrong": sorted(k for k, f in verdict.details["features"].items()
+                                if f["status"] in ("wrong", "missing", "invalid")),
                 "f_qa": verdict.fitness["f_qa"],
                 "confidence": {name: float(head.probabilities(features).max())
                                for name, head in sorted(model.heads.items())}}

@@ -7,7 +7,7 @@ import pytest
 
 from isu_validate.render import load_camera
 from isu_validate.render.footprint import (NEAR_M, clip_near, facing_camera, fill_parts, fill_triangles, footprints,
-                                           orientation, pack, project, to_camera, unpack_counts)
+                                           orientation, pack, project, unpack_counts)
 
 SQUARE = np.array([[[10, 10], [20, 10], [20, 20]], [[10, 10], [20, 20], [10, 20]]], float)
 
@@ -72,7 +72,7 @@ def test_near_plane_cuts_triangles_behind_the_camera():
 def test_projection_matches_the_camera_rig():
     rig = load_camera()
     points = np.array([[-0.5, 0.3, 0.6], [-0.9, -0.2, 0.5], [0.0, 0.37, 0.9]])
-    cam = to_camera(points, rig.R, rig.t)
+    cam = rig.to_camera(points)
     uv = project(cam.reshape(1, 3, 3), rig.fx, rig.cx, rig.cy)[0]
     assert np.allclose(uv, rig.project(points), atol=1e-9)
 

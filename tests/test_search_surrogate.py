@@ -80,7 +80,10 @@ def test_targets_come_from_the_verdict_and_errors_teach_nothing():
                     details={"verdict": {"features": {"a": {"status": "correct"}, "b": {"status": "missing"}}}})
     caption = Record("g0-i1", 0, 1, "surrogate", 1, "k", {}, {}, primary=0.7)
     broken = Record("g0-i2", 0, 2, "surrogate", 1, "k", {}, {}, primary=1.0, sut_error="HTTP 502")
+    hidden = Record("g0-i3", 0, 3, "surrogate", 1, "k", {}, {}, primary=1.0,
+                    details={"verdict": {"features": {"a": {"status": "correct"}, "b": {"status": "occluded"}}}})
     assert record_targets(ok) == {"a": 0.0, "b": 1.0}
+    assert record_targets(hidden) == {"a": 0.0}   # a hidden feature is no error of the SUT
     assert record_targets(caption) == {"fitness": pytest.approx(0.3)}
     assert record_targets(broken) is None
 

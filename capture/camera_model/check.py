@@ -14,6 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
+from isu_validate.render.outputs import by_product
+
 from .colour_align import read_rgb8
 from .frames import IMAGE_SUFFIXES
 from .metering import LUMA
@@ -23,7 +25,7 @@ BINS = 64
 
 def pairs(sim_dir: str | Path, real_dir: str | Path) -> tuple[list[tuple[Path, Path]], list[str]]:
     sim = {p.stem: p for p in sorted(Path(sim_dir).iterdir()) if p.suffix.lower() in IMAGE_SUFFIXES
-           and not p.name.startswith(".") and "." not in p.stem}
+           and not p.name.startswith(".") and not by_product(p)}   # no contact sheet or channel images
     real = {p.stem: p for p in sorted(Path(real_dir).iterdir()) if p.suffix.lower() in IMAGE_SUFFIXES
             and not p.name.startswith(".")}
     matched = [(sim[k], real[k]) for k in sorted(sim) if k in real]

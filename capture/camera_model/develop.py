@@ -63,8 +63,8 @@ def develop_run(run_dir: str | Path, model: ImagingModel, out_dir: str | Path, p
     out_dir.mkdir(parents=True, exist_ok=True)
     _claim(out_dir, model)
     log = out_dir / "exposure.jsonl"
-    done = {json.loads(line)["exr"]: json.loads(line) for line in log.read_text().splitlines() if line.strip()} \
-        if log.exists() else {}
+    logged = [json.loads(line) for line in log.read_text().splitlines() if line.strip()] if log.exists() else []
+    done = {row["exr"]: row for row in logged}
     rows = []
     with open(log, "a") as fh:
         for i, exr in enumerate(exrs, 1):

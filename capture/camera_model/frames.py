@@ -12,7 +12,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-IMAGE_SUFFIXES = {".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff"}
+from isu_validate.pairs import IMAGE_SUFFIXES  # one list of the image files every reader accepts
 BLACK_CODE, WHITE_CODE = 2, 253      # a frame with 99% of its pixels beyond these is all black / saturated
 EXTREME_SHARE = 0.99
 

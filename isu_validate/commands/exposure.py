@@ -188,8 +188,7 @@ def _colour(args) -> int:
     if args.camera_out:
         from dataclasses import replace
 
-        from capture.camera_model.model import Response
-        base = model.response or Response.srgb()
+        base = model.curve
         fitted = replace(model, response=replace(base, white_balance=fit.white_balance, fit={
             **base.fit, "white_balance_from": f"neutral patches of {args.real} against {args.sim}"}),
             colour=replace(fit.correction, fit={k: report[k] for k in ("real", "sim", "de2000_before", "de2000_after",

@@ -15,12 +15,6 @@ import numpy as np
 NEAR_M = 0.02          # the render camera's clip_start: nothing nearer is drawn, by Blender either
 
 
-def to_camera(points_cabin: np.ndarray, rotation: np.ndarray, position: np.ndarray) -> np.ndarray:
-    """Cabin points (..., 3) in the camera's OpenCV frame (x right, y down, z forward);
-    ``rotation`` is R_cabin_from_camera."""
-    return (np.asarray(points_cabin, float) - np.asarray(position, float)) @ np.asarray(rotation, float)
-
-
 def clip_near(triangles: np.ndarray, near: float = NEAR_M) -> np.ndarray:
     """Camera-frame triangles (T,3,3) cut at the plane z = near: wholly behind it they go, crossing
     it they become the one or two triangles of the part in front (Sutherland-Hodgman, one plane)."""

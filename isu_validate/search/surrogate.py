@@ -73,12 +73,16 @@ class SceneEncoder:
 
 def record_targets(record) -> dict[str, float] | None:
     """What a test says about the SUT's errors: {feature: 1 wrong / 0 right} from the VQA
-    verdict, else {"fitness": 1 - fitness}; None for a test without a verdict."""
+    verdict, else {"fitness": 1 - fitness}; None for a test without a verdict.  An occluded
+    feature says nothing about the SUT (the judge leaves it out too): hiding things earns the
+    search nothing."""
     if record.errored or record.primary is None:
         return None
     features = (record.details.get("verdict") or {}).get("features")
     if isinstance(features, dict) and features:
-        return {key: float(item.get("status") != "correct") for key, item in features.items()}
+        judged = {key: float(item.get("status") != "correct") for key, item in features.items()
+                  if item.get("status") != "occluded"}
+        return judged or None
     return {FITNESS_TARGET: float(np.clip(1.0 - float(record.primary), 0.0, 1.0))}
 
 

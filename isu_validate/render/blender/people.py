@@ -69,8 +69,10 @@ class Person:
 
     # ------------------------------------------------------------------ building
     def _build(self, topo: dict) -> None:
-        for obj in self.parts.values():
+        for obj in self.parts.values():   # the object and its mesh: nothing left behind in bpy.data
+            mesh = obj.data
             bpy.data.objects.remove(obj)
+            bpy.data.meshes.remove(mesh)
         faces, slots, head = topo["faces"], topo["slots"], topo["head"]
         self.lips_mask = str(topo["lips_mask"])
         mats = [self._material(str(n)) for n in topo["slot_names"]]
@@ -202,7 +204,9 @@ class Driver:
     the driver's seat slid on its track to fit (with the belt buckle mounted on it)."""
 
     def __init__(self, rig: dict, coll, seat_parts: list):
-        self.person = Person("driver", coll, INSTANCE_ID["driver"], INSTANCE_ID["driver_face"])
+        # one persistent person per topology (the genders differ in topology), so a change of
+        # driver between frames swaps vertices instead of rebuilding meshes
+        self.coll, self.persons, self.person = coll, {}, None
         self.belt = _Belt(rig["seat_belt"], coll)
         self.phone_hand = None
         self.seat = [(obj, obj.location.x) for obj in seat_parts]
@@ -212,6 +216,13 @@ class Driver:
             obj.location.x = x + shift
 
     def apply(self, f: dict, spec: dict) -> None:
+        if spec["topology"] not in self.persons:
+            self.persons[spec["topology"]] = Person(f"driver{len(self.persons)}", self.coll,
+                                                    INSTANCE_ID["driver"], INSTANCE_ID["driver_face"])
+        for topology, person in self.persons.items():
+            if topology != spec["topology"]:
+                person.show(False)
+        self.person = self.persons[spec["topology"]]
         data = self.person.set(spec["topology"], spec["state"])
         self.slide_seat(float(data["seat_shift"]))
         self.person.set_shirt(SHIRT[f["tshirt_colour"]])
@@ -221,7 +232,8 @@ class Driver:
             self.phone_hand = (Vector(data["phone_centre"].tolist()), f["phone_position"])
 
     def hide(self) -> None:
-        self.person.show(False)
+        for person in self.persons.values():
+            person.show(False)
         self.belt.hide()
         self.slide_seat(0.0)
         self.phone_hand = None

@@ -18,6 +18,7 @@ import numpy as np
 
 from ...analysis.diversity import cluster_failures, coverage, normalised_entropy
 from ...analysis.embeddings import make_embedder
+from ...analysis.rq2 import mean_std
 from ...analysis.stats import rank_sum_test, vargha_delaney
 from ...analysis.thresholds import fails_at, thresholds_for
 from ...space import SceneSpace
@@ -105,8 +106,8 @@ def _diversity(space, summary: SutSummary, by_algo: dict[str, list[Outcome]], k:
         labels = [[c for (a, i, _), c in zip(items, clustering.labels) if a == algo and i == r] for r in range(len(runs))]
         per_run[algo] = {"coverage": [coverage(l, clustering.k) for l in labels],
                          "entropy": [normalised_entropy(l, clustering.k) for l in labels]}
-        summary.diversity[algo] = {f"{m} {s}": f(per_run[algo][m]) for m in ("coverage", "entropy")
-                                   for s, f in (("mean", _nanmean), ("std", _nanstd))}
+        summary.diversity[algo] = {f"{m} {s}": v for m in ("coverage", "entropy")
+                                   for s, v in zip(("mean", "std"), mean_std(per_run[algo][m]))}
     if summary.baseline in per_run:
         for algo in summary.algorithms:
             if algo == summary.baseline:
@@ -115,17 +116,6 @@ def _diversity(space, summary: SutSummary, by_algo: dict[str, list[Outcome]], k:
                 x, y = per_run[algo][measure], per_run[summary.baseline][measure]
                 summary.diversity_tests.append({"measure": measure, "algorithm": algo, "p": rank_sum_test(x, y).p,
                                                 "A12": vargha_delaney(x, y).a12})
-
-
-def _nanmean(values) -> float:
-    arr = np.array(values, dtype=float)
-    return float(np.nanmean(arr)) if np.isfinite(arr).any() else math.nan
-
-
-def _nanstd(values) -> float:
-    arr = np.array(values, dtype=float)
-    arr = arr[np.isfinite(arr)]
-    return float(arr.std(ddof=1)) if len(arr) > 1 else math.nan
 
 
 def _goal(summary: SutSummary) -> dict:
