@@ -139,3 +139,20 @@ def test_black_and_saturated_renders_develop_to_finite_frames(kind):
 def test_noise_variance_follows_shot_plus_read():
     n = Noise(shot=1e-3, read=1e-2)
     assert n.variance(0.5, 2.0) == pytest.approx(1e-3 * 2 * 0.5 + (1e-2 * 2) ** 2)
+
+
+def test_the_camera_meters_a_frame_it_recorded_at_the_level_it_chose():
+    """One metering pipeline: the level ``apply`` steered a render to is the level ``meter_frame`` reads
+    back from the recorded frame, and ``exposure fit``'s prediction from the recovered scene is the
+    exposure ``apply`` chose (no noise, no colour correction: nothing else may differ)."""
+    from capture.camera_model.apply import auto_expose, forward_curve
+    from capture.camera_model.metering import meter_frame
+    model = synthetic.camera().with_part(noise=None, colour=None)
+    ae = model.exposure
+    image, chosen = apply(_scene(0.3), model)
+    assert chosen.at_limit is None
+    read_back = meter_frame(image / 255.0, model.curve, ae.metering, ae.centre_sigma, ae.roi)
+    assert read_back == pytest.approx(chosen.metered, abs=2e-3)      # 8-bit rounding only
+    scene = model.curve.to_linear(image / 255.0) / (chosen.exposure_us * 1e-6 * chosen.gain * ae.sensitivity)
+    predicted = auto_expose(scene, ae, forward_curve(model.curve))
+    assert predicted.exposure_us * predicted.gain == pytest.approx(chosen.exposure_us * chosen.gain, rel=0.02)

@@ -85,6 +85,15 @@ def forward_curve(response: Response) -> ForwardCurve:
     return _CURVES[key][1]
 
 
+def auto_expose(linear: np.ndarray, ae: AutoExposure, curve: ForwardCurve, to_camera=None) -> Exposure:
+    """The camera's auto-exposure on a linear image (H, W, 3): its statistics grid (block averages),
+    ``to_camera`` (render RGB -> camera RGB, applied to the small grid, not the frame) when given, metered
+    as the camera meters, and the exposure time and gain it chooses. The one metering pipeline: the
+    post-render step, ``exposure apply`` and ``exposure fit``'s predictions all call it."""
+    stats = metering.grid(linear)
+    return choose_exposure(to_camera(stats) if to_camera is not None else stats, ae, curve)
+
+
 def choose_exposure(stats: np.ndarray, ae: AutoExposure, curve: ForwardCurve) -> Exposure:
     """Meter the camera's statistics grid (``metering.grid`` of its linear RGB) as the camera would and
     choose exposure time and gain."""
@@ -93,7 +102,7 @@ def choose_exposure(stats: np.ndarray, ae: AutoExposure, curve: ForwardCurve) ->
 
     def meter(product: float) -> float:
         t, g = ae.split(product)
-        return metering.level(curve(np.clip(sample * np.float32(t * 1e-6 * g * ae.sensitivity), 0.0, 1.0)), wts)
+        return metering.meter(sample, curve, wts, np.float32(t * 1e-6 * g * ae.sensitivity))
 
     lo, hi = ae.product_range
     if ae.frames > 0:
@@ -168,7 +177,7 @@ def apply(linear_rgb: np.ndarray, model: ImagingModel, seed: int = 0,
     if ae is not None and manual is not None:
         exposure = Exposure(float(manual[0]), float(manual[1]), float("nan"), None, None, 0)
     elif ae is not None:   # meter on the statistics grid before developing the whole frame
-        exposure = choose_exposure(colour_correct(metering.grid(linear_rgb), model.response, model.colour), ae, curve)
+        exposure = auto_expose(linear_rgb, ae, curve, lambda stats: colour_correct(stats, model.response, model.colour))
     scale = exposure.exposure_us * 1e-6 * exposure.gain * ae.sensitivity if exposure is not None else 1.0
     signal = colour_correct(linear_rgb, model.response, model.colour, scale)
     gain = exposure.gain if exposure is not None else 1.0

@@ -12,6 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from isu_validate.render.outputs import srgb_levels, srgb_to_linear
+
 from .chart import NEUTRALS, PATCHES
 from .model import ColourCorrection, Response
 
@@ -44,13 +46,13 @@ class ColourFit:
 
 
 def srgb_decode(v):
-    v = np.clip(np.asarray(v, dtype=float), 0.0, 1.0)
-    return np.where(v <= 0.04045, v / 12.92, ((v + 0.055) / 1.055) ** 2.4)
+    """Display levels (clipped to 0..1) -> linear light, through ``outputs.srgb_to_linear``."""
+    return srgb_to_linear(np.clip(np.asarray(v, dtype=float), 0.0, 1.0))
 
 
 def srgb_encode(v):
-    v = np.clip(np.asarray(v, dtype=float), 0.0, 1.0)
-    return np.where(v <= 0.0031308, 12.92 * v, 1.055 * v ** (1 / 2.4) - 0.055)
+    """Linear light (clipped to 0..1) -> display levels 0..1 as floats (``outputs.srgb_encode`` gives 8-bit)."""
+    return srgb_levels(np.clip(np.asarray(v, dtype=float), 0.0, 1.0))
 
 
 def de2000(display_a: np.ndarray, display_b: np.ndarray) -> np.ndarray:

@@ -103,13 +103,13 @@ def _choose_metering(frames, limits, roi, response: Response) -> tuple[str, dict
     candidates = dict(CANDIDATES)
     if roi:
         candidates["roi"] = ("roi", {"roi": tuple(roi)})
-    stats = [metering.grid(response.to_linear(f.image)) for f in frames]
-    curved = [response.to_output(np.clip(s, 0.0, 1.0)) for s in stats]
+    stats = [metering.frame_statistics(f.image, response) for f in frames]
     levels_by = {}
     for name, (kind, options) in candidates.items():
-        levels_by[name] = [metering.level(c, metering.weights(c.shape[:2], kind, options.get("centre_sigma", 0.25),
-                                                              options.get("roi", (0.0, 0.0, 1.0, 1.0))))
-                           for c in curved]
+        levels_by[name] = [metering.meter(s, response.to_output,
+                                          metering.weights(s.shape[:2], kind, options.get("centre_sigma", 0.25),
+                                                           options.get("roi", (0.0, 0.0, 1.0, 1.0))))
+                           for s in stats]
     best = min(levels_by, key=lambda n: _spread(levels_by[n], limits))
     return best, levels_by, candidates
 

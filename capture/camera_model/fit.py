@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 
 from . import frames as frames_mod
-from .apply import choose_exposure, forward_curve
-from .metering import grid, meter_frame
+from .apply import auto_expose, forward_curve
+from .metering import meter_frame
 from .exposure_fit import fit_auto_exposure
 from .model import AutoExposure, ImagingModel, Response
 from .noise_fit import NOISE_ADVICE, fit_noise
@@ -139,7 +139,7 @@ def predict_frames(model: ImagingModel, auto) -> list[dict]:
     out = []
     for f in auto:
         scene = response.to_linear(f.image) / (f.product * 1e-6 * ae.sensitivity)
-        chosen = choose_exposure(grid(scene), ae, curve)
+        chosen = auto_expose(scene, ae, curve)
         measured = meter_frame(f.image, response, ae.metering, ae.centre_sigma, ae.roi)
         out.append({"frame": f.path.name, "measured_product": f.product,
                     "predicted_product": chosen.exposure_us * chosen.gain, "measured_level": measured,

@@ -49,9 +49,20 @@ def grid(linear: np.ndarray, cells: int = CELLS) -> np.ndarray:
     return cv2.resize(np.ascontiguousarray(linear, dtype=np.float32), size, interpolation=cv2.INTER_AREA)
 
 
+def meter(stats: np.ndarray, curve, wts: np.ndarray, scale: float = 1.0) -> float:
+    """The camera's meter: its statistics grid (``grid`` of linear camera RGB) times the exposure
+    ``scale``, clipped at saturation, through its tone ``curve``, luma-weighted by ``wts``. Every
+    metered level (auto-exposure choice, fitting, predicting) is this one function."""
+    return level(curve(np.clip(stats * scale, 0.0, 1.0)), wts)
+
+
+def frame_statistics(levels: np.ndarray, response) -> np.ndarray:
+    """The statistics grid of a recorded frame (output levels 0..1): linearised through the response."""
+    return grid(response.to_linear(levels))
+
+
 def meter_frame(levels: np.ndarray, response, metering: str, centre_sigma: float = 0.25,
                 roi=(0.0, 0.0, 1.0, 1.0)) -> float:
     """The metered level of a recorded frame (output levels 0..1) as its camera meters it."""
-    stats = grid(response.to_linear(levels))
-    curved = response.to_output(np.clip(stats, 0.0, 1.0))
-    return level(curved, weights(stats.shape[:2], metering, centre_sigma, roi))
+    stats = frame_statistics(levels, response)
+    return meter(stats, response.to_output, weights(stats.shape[:2], metering, centre_sigma, roi))

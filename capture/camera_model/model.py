@@ -74,8 +74,8 @@ class Response:
 
     @staticmethod
     def srgb(white_balance=(1.0, 1.0, 1.0), fit=None) -> "Response":
-        z = np.arange(CODES) / (CODES - 1)
-        lin = np.where(z <= 0.04045, z / 12.92, ((z + 0.055) / 1.055) ** 2.4)
+        from isu_validate.render.outputs import srgb_to_linear   # here: outputs imports the rig, which imports this
+        lin = srgb_to_linear(np.arange(CODES) / (CODES - 1))
         return Response(np.repeat(lin[:, None], 3, axis=1), tuple(white_balance), fit or {})
 
     def to_output(self, signal: np.ndarray) -> np.ndarray:

@@ -38,11 +38,20 @@ def _pass(passes: dict, suffix: str) -> np.ndarray:
     raise KeyError(f"render pass {suffix!r} missing from the worker's EXR (have {', '.join(passes)})")
 
 
+def srgb_levels(linear):
+    """The sRGB transfer curve (IEC 61966-2-1): linear values -> display levels (0..1 for 0..1), not
+    clipped. The one place the curve is written; 8-bit frames, colour fitting and the camera model use it."""
+    return np.where(linear <= 0.0031308, 12.92 * linear, 1.055 * np.power(linear, 1 / 2.4) - 0.055)
+
+
+def srgb_to_linear(levels):
+    """The inverse of ``srgb_levels``: display levels -> linear values."""
+    return np.where(levels <= 0.04045, levels / 12.92, ((levels + 0.055) / 1.055) ** 2.4)
+
+
 def srgb_encode(linear: np.ndarray) -> np.ndarray:
     """Scene-linear RGB -> 8-bit sRGB (Blender's 'Standard' view transform)."""
-    x = np.clip(linear, 0.0, 1.0)
-    y = np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
-    return np.round(y * 255.0).astype(np.uint8)
+    return np.round(srgb_levels(np.clip(linear, 0.0, 1.0)) * 255.0).astype(np.uint8)
 
 
 def channel_paths(out: Path) -> dict[str, Path]:
