@@ -17,6 +17,7 @@ from typing import Any
 
 from .archive import TestRecord
 from .protocols import RenderError, SUTResponse
+from .evaluate.occlusion import nothing_to_judge
 from .space import SceneSpace, load_space
 
 
@@ -131,7 +132,7 @@ class Pipeline:
         image = self._render(record)
         if image is not None:
             self._write_label(job, canonical, record)   # with what the frame shows of each feature
-            hidden = _nothing_to_judge(self.space, canonical, record.occluded)
+            hidden = nothing_to_judge(self.space, canonical, record.occluded)
             if hidden:
                 record.render_error = hidden   # no verdict, like an error: the SUT is not asked
             else:
@@ -190,15 +191,6 @@ class Pipeline:
             close = getattr(part, "close", None)
             if close:
                 close()
-
-
-def _nothing_to_judge(space: SceneSpace, canonical: dict, occluded: list[str]) -> str | None:
-    """Why a frame cannot show anything the SUT would be asked about (every question occluded)."""
-    asked = [q.key for q in space.questions(canonical)]
-    if asked and set(asked) <= set(occluded):
-        return (f"unusable frame: every feature asked about is occluded ({', '.join(asked)}), so the scene has "
-                f"no verdict; see the visible shares in the label (lower --min-visible to judge them anyway)")
-    return None
 
 
 def _relative(path, root: Path) -> str:

@@ -249,3 +249,22 @@ def test_a_scene_with_everything_hidden_has_no_verdict_and_the_sut_is_not_asked(
     for r in run.records:
         assert "every feature asked about is occluded" in r.render_error
         assert r.sut_raw is None and r.answers is None and not r.failed and r.image
+
+
+@pytest.mark.parametrize("mode", ["vqa", "vc"])
+def test_the_run_and_the_judges_agree_on_a_scene_with_everything_hidden(tmp_path, monkeypatch, mode):
+    """The pipeline (no verdict, SUT not asked, counted apart as an unusable frame) and a judge asked
+    about the same scene anyway (pins, agree) must give the same answer: no verdict, never a failure."""
+    monkeypatch.setenv("ISU_TEST_OCCLUDE", "all")
+    run_dir = tmp_path / "run"
+    pipeline = PipelineConfig(run_dir=str(run_dir), sut="blind-double", factory=FACTORY, mode=mode)
+    run_search(RunConfig(pipeline=pipeline, algorithm="rs", pop_size=3, seed=5, budget_tests=3))
+    from isu_validate.analysis.runs import load_run
+    run = load_run(run_dir)
+    judge = make_judge(mode, run.space)
+    for r in run.records:
+        request = build_request(run.space, r.canonical, run_dir / r.image, mode)
+        anyway = SUTResponse(answers={q.key: q.truth for q in request.questions}, caption="A driver.")
+        verdict = judge.judge(r.canonical, request, anyway, occluded=r.occluded)
+        assert r.primary is None and not r.failed and r.render_error
+        assert verdict.fitness == {} and not verdict.failed and verdict.details["no_verdict"] == r.render_error

@@ -14,6 +14,7 @@ from typing import Any, Collection, Mapping
 from ..protocols import SUTRequest, SUTResponse, Verdict
 from ..space import SceneSpace
 from . import similarity, text_metrics
+from .occlusion import no_verdict, nothing_to_judge
 from .oracles import (CAPTION_METRICS, DEFAULT_THRESHOLD, check_conjunction, check_threshold, conjunction_failed,
                       emb_failed)
 from .reference_caption import reference_caption, template_for
@@ -50,6 +51,9 @@ class CaptionJudge:
     def judge(self, scene: Mapping[str, Any], request: SUTRequest, response: SUTResponse,
               occluded: Collection[str] = ()) -> Verdict:
         settings = {"oracle": self.oracle, "threshold": self.threshold}
+        hidden = nothing_to_judge(self.space, scene, occluded)
+        if hidden:   # the pipeline does not ask the SUT about such a scene; a judge asked anyway agrees
+            return no_verdict(hidden, **settings)
         if response.error:
             return Verdict({}, 1.0, False, {"sut_error": response.error, **settings})
         # the reference says nothing about what the frame hides: no sentence naming an occluded feature

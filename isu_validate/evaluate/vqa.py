@@ -16,6 +16,7 @@ from typing import Any, Collection, Mapping
 
 from ..protocols import SUTRequest, SUTResponse, Verdict
 from ..space import SceneSpace
+from .occlusion import no_verdict, nothing_to_judge
 from .oracles import DEFAULT_THRESHOLD, check_threshold, vqa_failed
 
 CORRECT, WRONG, MISSING, INVALID, OCCLUDED = "correct", "wrong", "missing", "invalid", "occluded"
@@ -30,6 +31,9 @@ class VQAJudge:
 
     def judge(self, scene: Mapping[str, Any], request: SUTRequest, response: SUTResponse,
               occluded: Collection[str] = ()) -> Verdict:
+        hidden = nothing_to_judge(self.space, scene, occluded)
+        if hidden:   # the pipeline does not ask the SUT about such a scene; a judge asked anyway agrees
+            return no_verdict(hidden, threshold=self.threshold)
         if response.error:
             # Not a failure-inducing scene: no fitness is measured, and the search is not drawn to it.
             return Verdict({}, 1.0, False, {"sut_error": response.error, "threshold": self.threshold})
@@ -55,8 +59,6 @@ class VQAJudge:
                   for s in (CORRECT, WRONG, MISSING, INVALID, OCCLUDED)}
         details = {"features": features, "counts": counts, "threshold": self.threshold,
                    "ignored": sorted(set(answers) - set(features))}
-        if features and not weights:   # everything asked was hidden: nothing was measured
-            return Verdict({}, 1.0, False, {**details, "no_verdict": "every feature asked about is occluded"})
         scored = {k: f for k, f in features.items() if f["status"] != OCCLUDED}
         f_qa, details["weighting"] = _weighted_score(scored, weights)
         return Verdict({"f_qa": f_qa}, f_qa, vqa_failed(f_qa, self.threshold), details)
