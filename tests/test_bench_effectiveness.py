@@ -140,8 +140,9 @@ def test_the_bench_prints_every_threshold_the_goal_and_writes_json(tmp_path, cap
 
 
 def test_the_bench_rejects_unknown_algorithms_and_pipeline_without_out(capsys):
-    assert main(["bench", "effectiveness", "--algorithms", "surrogate,sa"]) == 2
-    assert "unknown algorithm" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as stop:   # argparse refuses it with the one parser's message
+        main(["bench", "effectiveness", "--algorithms", "surrogate,sa"])
+    assert stop.value.code == 2 and "unknown algorithm 'sa'" in capsys.readouterr().err
     assert main(["bench", "effectiveness", "--pipeline"]) == 2
     assert "--out" in capsys.readouterr().err
 

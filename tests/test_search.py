@@ -128,3 +128,25 @@ def test_population_size_is_checked():
         make_algorithm("nsga2", SPACE, pop_size=1, seed=0)
     with pytest.raises(ValueError, match="unknown algorithm"):
         make_algorithm("sa", SPACE, pop_size=4, seed=0)
+
+
+def test_algorithm_lists_have_one_parser_with_one_error():
+    from isu_validate.search.algorithm_names import check_algorithm, parse_algorithms
+    assert parse_algorithms(" surrogate, rs,,surrogate ") == ["surrogate", "rs"]   # order kept, each once
+    for text, message in [("surrogate,sa", "unknown algorithm 'sa'; the algorithms are surrogate, nsga2, rs"),
+                          ("ga,sa", "unknown algorithms 'ga', 'sa'"), (" , ", "no algorithm given")]:
+        with pytest.raises(ValueError, match=message):
+            parse_algorithms(text)
+    with pytest.raises(ValueError, match="one algorithm expected"):
+        check_algorithm("nsga2,rs")
+
+
+@pytest.mark.parametrize("argv", [["run", "--algorithm", "sa"], ["bench", "search", "--algorithm", "rs,sa"],
+                                  ["bench", "effectiveness", "--algorithms", "sa"],
+                                  ["bench", "effectiveness", "--baseline", "sa"]])
+def test_every_command_refuses_an_unknown_algorithm_naming_the_known_ones(argv, capsys):
+    from isu_validate.cli import main
+    with pytest.raises(SystemExit) as stop:
+        main(argv)
+    err = capsys.readouterr().err
+    assert stop.value.code == 2 and "unknown algorithm 'sa'; the algorithms are surrogate, nsga2, rs" in err

@@ -19,6 +19,7 @@ from ..sut.prompt import PROMPT_STYLES
 from ..render.visibility import DEFAULT_MIN_VISIBLE, parse_min_visible
 from .sut import parse_options
 from ..search import ALGORITHMS, RunConfig, RunError, SUTErrorsStop, run_search
+from ..search.algorithm_names import algorithm_option
 
 _PIPELINE, _RUN = PipelineConfig(run_dir=""), RunConfig(pipeline=PipelineConfig(run_dir=""))
 DEFAULT_BUDGET = _RUN.budget_tests
@@ -73,7 +74,7 @@ def add_run_options(p) -> None:
                                  "API keys: see below)")
     p.add_argument("--mode", choices=["vqa", "vc"], help=f"visual question answering or captioning (default {d.mode})")
     p.add_argument("--space", help=f"scene space: shipped name or TOML path (default {d.space})")
-    p.add_argument("--algorithm", choices=ALGORITHMS, help=f"search algorithm (default {r.algorithm}): surrogate (surrogate-assisted, learns "
+    p.add_argument("--algorithm", type=algorithm_option, metavar="|".join(ALGORITHMS), help=f"search algorithm (default {r.algorithm}): surrogate (surrogate-assisted, learns "
                         "where the SUT errs), nsga2 (the paper's NSGA-II, for replication), rs (random search, the baseline)")
     p.add_argument("--pop-size", type=int, help=f"population size (default {r.pop_size})")
     p.add_argument("--budget", type=int, help=f"number of tests (default {DEFAULT_BUDGET}; with --resume: extend the budget)")

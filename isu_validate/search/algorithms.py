@@ -16,10 +16,10 @@ from pymoo.problems.static import StaticProblem
 from pymoo.core.termination import NoTermination
 
 from ..space import SceneSpace
+from .algorithm_names import ALGORITHMS, check_algorithm
 from .operators import CanonicalDuplicateElimination, SceneRepair, SceneSampling
 from .problem import SceneProblem
 
-ALGORITHMS = ("surrogate", "nsga2", "rs")
 _TOP_UP_TRIES = 200
 
 
@@ -123,6 +123,4 @@ def make_algorithm(name: str, space: SceneSpace, pop_size: int, seed: int) -> Se
     from .surrogate_search import SurrogateSearch
 
     classes = {"surrogate": SurrogateSearch, "nsga2": NSGA2Search, "rs": RandomSearch}
-    if name not in classes:
-        raise ValueError(f"unknown algorithm {name!r}; use one of {', '.join(ALGORITHMS)}")
-    return classes[name](space, pop_size, seed)
+    return classes[check_algorithm(name)](space, pop_size, seed)

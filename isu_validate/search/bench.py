@@ -16,7 +16,8 @@ import numpy as np
 
 from ..archive import Archive, TestRecord
 from ..space import load_space
-from .algorithms import ALGORITHMS, make_algorithm
+from .algorithm_names import ALGORITHMS, algorithms_option
+from .algorithms import make_algorithm
 from .diversity import DiversityTracker
 from .loop import _objectives
 from .effectiveness.harness import InstantEvaluation
@@ -28,7 +29,7 @@ WINDOW = 200  # tests per timing window
 def register_bench(sub) -> None:
     p = sub.add_parser("search", help="search overhead per test at growing archive sizes")
     p.add_argument("--sizes", default="1000,10000", help="archive sizes to report at (comma-separated)")
-    p.add_argument("--algorithm", default=ALGORITHMS[0],
+    p.add_argument("--algorithm", default=ALGORITHMS[0], type=algorithms_option,
                    help=f"one or more of {', '.join(ALGORITHMS)}, comma-separated (default {ALGORITHMS[0]})")
     p.add_argument("--pop-size", type=int, default=50)
     p.add_argument("--space", default="isu-paper")
@@ -95,11 +96,7 @@ def measure(space_name: str, algorithm: str, pop_size: int, seed: int, sizes: li
 
 def cmd_bench_search(args) -> int:
     sizes = sorted(int(s) for s in args.sizes.split(","))
-    algorithms = [a.strip() for a in args.algorithm.split(",") if a.strip()]
-    unknown = [a for a in algorithms if a not in ALGORITHMS]
-    if unknown:
-        raise ValueError(f"unknown algorithm(s) {unknown}; use some of {', '.join(ALGORITHMS)}")
-    for algorithm in algorithms:
+    for algorithm in args.algorithm:
         with tempfile.TemporaryDirectory() as tmp:
             start = time.perf_counter()
             results = measure(args.space, algorithm, args.pop_size, args.seed, sizes, Path(tmp))

@@ -14,7 +14,7 @@ import time
 from pathlib import Path
 
 from ...space import load_space
-from ..algorithms import ALGORITHMS
+from ..algorithm_names import ALGORITHMS, algorithm_option, algorithms_option
 from .diagnosis import diagnose
 from .harness import simulate
 from .pipeline_runs import PipelineSettings, run_all
@@ -29,8 +29,8 @@ def register_bench(sub) -> None:
     p.add_argument("--suts", default=",".join(BENCHMARK_SUTS),
                    help=f"benchmark SUTs, comma-separated (default {','.join(BENCHMARK_SUTS)}; "
                         "random-spots-SEED draws other blind spots)")
-    p.add_argument("--algorithms", default=",".join(ALGORITHMS), help=f"default {','.join(ALGORITHMS)}")
-    p.add_argument("--baseline", default="rs", help="the algorithm the others are compared with (default rs)")
+    p.add_argument("--algorithms", default=",".join(ALGORITHMS), type=algorithms_option, help=f"default {','.join(ALGORITHMS)}")
+    p.add_argument("--baseline", default="rs", type=algorithm_option, help="the algorithm the others are compared with (default rs)")
     p.add_argument("--seeds", type=int, default=10, help="runs per algorithm, seeds 1..N (default 10)")
     p.add_argument("--budget", type=int, default=150, help="tests per run (default 150)")
     p.add_argument("--pop-size", type=int, default=15, help="tests per generation (default 15)")
@@ -58,10 +58,7 @@ def _names(text: str) -> list[str]:
 
 
 def _check(args) -> list[str]:
-    algorithms = _names(args.algorithms)
-    unknown = [a for a in algorithms if a not in ALGORITHMS]
-    if unknown:
-        raise ValueError(f"unknown algorithm(s) {unknown}; use some of {', '.join(ALGORITHMS)}")
+    algorithms = args.algorithms
     if args.seeds < 1 or args.budget < 1 or args.pop_size < 2:
         raise ValueError("--seeds and --budget must be at least 1 and --pop-size at least 2")
     if args.pipeline and args.out is None:
