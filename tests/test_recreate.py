@@ -157,3 +157,29 @@ def test_recreate_writes_pairs_sheets_and_the_effort_against_the_run_order(run_d
     assert manifest["effort"]["minutes"] == plan["minutes"] and manifest["space"] == "isu-paper"
     assert main(["recreate", str(run_dir), "--out", str(out)]) == 2   # never over a pairs directory in use
     assert "not empty" in capsys.readouterr().err
+
+
+def test_the_sketch_keeps_every_label_off_the_markers():
+    """Seat names, angles, 'origin' and 'camera' are laid out apart from the numbered markers (they used
+    to sit on the passenger seat's name when the co-driver seat held things)."""
+    import re
+
+    from isu_validate.recreate.sketch import CHAR_W, FONT, MARKER_R, top_view
+    from isu_validate.render.cabin import load_cabin
+    space, cabin = load_space(), load_cabin("default")
+    scene = {"driver_gender": "FEMALE", "driver_emotion": "HAPPY", "driver_height": "H2", "driver_weight": "W2",
+             "phone_position": "P5", "seat_belt": "YES", "tshirt_colour": "WHITE", "child_seat": "NO", "child": "NO",
+             "car_lights": "OFF", "external_light": "MEDIUM", "luggage": "YES", "luggage_orientation": 60.0,
+             "luggage_position": "BACK", "luggage_colour": "ANTHRACITE", "phone_codriver_seat": "YES",
+             "colacan_codriver_seat": "YES", "colabottle_codriver_seat": "YES"}
+    svg = top_view(cabin, checklist(space, scene, cabin), camera=(0.6, 0.0))
+    markers = [(float(x), float(y)) for x, y in re.findall(rf'<circle cx="([\d.]+)" cy="([\d.]+)" r="{MARKER_R:g}"', svg)]
+    labels = re.findall(r'<text x="([\d.]+)" y="([\d.]+)" font-size="[\d.]+" text-anchor="(\w+)"[^>]*>([^<]+)</text>', svg)
+    assert len(markers) == 4 and {"passenger", "driver", "rear", "origin", "camera", "75°"} <= {t for *_, t in labels}
+    for x, y, anchor, text in labels:
+        width = CHAR_W * len(text)
+        left = float(x) - {"start": 0.0, "middle": width / 2, "end": width}[anchor]
+        top, bottom = float(y) - 0.8 * FONT, float(y) + 0.25 * FONT
+        for cx, cy in markers:
+            apart = left >= cx + MARKER_R or left + width <= cx - MARKER_R or top >= cy + MARKER_R or bottom <= cy - MARKER_R
+            assert apart, f"{text!r} overlaps the marker at ({cx}, {cy})"
