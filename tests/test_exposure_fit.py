@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from capture.camera_model import frames, synthetic
+from capture.camera_model.bench import response_error
 from capture.camera_model.fit import fit_camera, plot_predictions
 from capture.camera_model.model import ImagingModel
 from capture.camera_model.response_fit import UnderdeterminedError
@@ -35,19 +36,6 @@ def fitted(captures):
     return fit_camera([captures])
 
 
-def _curve_error(fitted, truth) -> float:
-    """Largest output difference over the signal range, each channel aligned by its best scale (the
-    response's scale is not observable from captures: it lives in the sensitivity)."""
-    s = np.linspace(0, 1, 1001)[:, None].repeat(3, 1)
-    true = truth.to_output(s)
-    worst = 0.0
-    for c in range(3):
-        errors = [np.abs(fitted.to_output(np.clip(s * k, 0, 1))[:, c] - true[:, c]).max()
-                  for k in np.exp(np.linspace(-0.3, 0.3, 121))]
-        worst = max(worst, min(errors))
-    return worst
-
-
 def test_the_fit_recovers_the_known_camera(fitted, truth):
     model = fitted.model
     assert model.exposure.target == pytest.approx(truth.exposure.target, rel=0.02)
@@ -55,7 +43,7 @@ def test_the_fit_recovers_the_known_camera(fitted, truth):
     assert model.exposure.order == "exposure_first"
     assert model.exposure.exposure_us[1] == pytest.approx(truth.exposure.exposure_us[1])
     assert model.exposure.gain[1] == pytest.approx(truth.exposure.gain[1])     # the darkest light reached the cap
-    assert _curve_error(model.response, truth.response) < 0.03
+    assert response_error(model.response, truth.response) < 0.03
     assert model.noise.shot == pytest.approx(truth.noise.shot, rel=0.35)
     assert model.noise.read == pytest.approx(truth.noise.read, rel=0.35)
 

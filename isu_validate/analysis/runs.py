@@ -8,7 +8,7 @@ from datetime import datetime
 from functools import cached_property
 from pathlib import Path
 
-from ..archive import Archive, TestRecord
+from ..archive import TestRecord, read_records
 from ..space import SceneSpace, SpaceError, load_space, space_from_dict
 from .thresholds import DEFAULT_THRESHOLD, METRIC_KEYS, thresholds_for
 
@@ -145,11 +145,7 @@ def load_run(path: str | Path) -> Run:
 def _read_archive(path: Path) -> list[TestRecord]:
     if not (path / ARCHIVE_FILE).is_file():
         return []  # a run that stopped before its first test
-    archive = Archive(path / ARCHIVE_FILE)
-    try:
-        return list(archive)
-    finally:
-        archive.close()
+    return read_records(path / ARCHIVE_FILE)
 
 
 def _space_of(info: dict, path: Path) -> SceneSpace:

@@ -10,7 +10,7 @@ import json
 from pathlib import Path
 from typing import IO
 
-from .store import Archive, TestRecord
+from .store import TestRecord, read_records
 
 BASE_COLUMNS = ["test_id", "algorithm", "seed", "generation"]
 TAIL_COLUMNS = ["f_div", "failed", "occluded", "sut_error", "render_error", "render_s", "sut_s", "image"]
@@ -30,11 +30,7 @@ def rows(run_dir: Path) -> tuple[list[str], list[dict]]:
     if not archive_path.exists():
         raise FileNotFoundError(f"{run_dir} is not a run directory (no archive.sqlite); give the folder `run --out` wrote")
     features, predicted, seen = _feature_names(run_dir)
-    archive = Archive(archive_path)
-    try:
-        records = list(archive)
-    finally:
-        archive.close()
+    records = read_records(archive_path)
     fitness_keys = sorted({k for r in records for k in r.fitness})
     columns = (BASE_COLUMNS + [f"x.{f}" for f in features] + [f"y.{f}" for f in predicted]
                + [f"visible.{f}" for f in seen] + fitness_keys + TAIL_COLUMNS)

@@ -124,3 +124,12 @@ class Archive:
 
     def close(self) -> None:
         self.db.close()
+
+
+def read_records(path: Path) -> list[TestRecord]:
+    """Every test of an archive file, in run order; the file is closed again."""
+    archive = Archive(path)
+    try:
+        return list(archive)
+    finally:
+        archive.close()

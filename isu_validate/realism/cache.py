@@ -21,11 +21,8 @@ def default_cache_dir() -> Path:
 
 
 def content_key(path: Path) -> str:
-    digest = hashlib.blake2b(digest_size=20)
     with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
+        return hashlib.file_digest(fh, lambda: hashlib.blake2b(digest_size=20)).hexdigest()
 
 
 class FeatureCache:

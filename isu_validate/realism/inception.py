@@ -43,11 +43,8 @@ def weights_path() -> Path:
 
 @lru_cache(maxsize=4)
 def file_sha1(path: Path) -> str:
-    digest = hashlib.sha1()
     with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
+        return hashlib.file_digest(fh, "sha1").hexdigest()
 
 
 def load_inception(path: Path | None = None, device: str = "cpu") -> torch.jit.ScriptModule:

@@ -23,11 +23,8 @@ CACHE_VERSION = 1
 
 @lru_cache(maxsize=512)
 def _file_hash(path: str, size: int, mtime_ns: int) -> str:
-    digest = hashlib.sha256()
     with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
+        return hashlib.file_digest(f, "sha256").hexdigest()
 
 
 def image_hash(path: str | os.PathLike) -> str:
