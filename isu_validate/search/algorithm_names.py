@@ -27,17 +27,16 @@ def check_algorithm(name: str) -> str:
     return names[0]
 
 
-def algorithms_option(text: str) -> list[str]:
-    """``type=`` of an argparse option taking a comma-separated list of algorithms."""
-    try:
-        return parse_algorithms(text)
-    except ValueError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
+def _option(parse):
+    """An argparse ``type=`` from a parser: its ValueError becomes argparse's usage error, message kept."""
+    def option(text: str):
+        try:
+            return parse(text)
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+    option.__name__ = parse.__name__
+    return option
 
 
-def algorithm_option(text: str) -> str:
-    """``type=`` of an argparse option taking one algorithm."""
-    try:
-        return check_algorithm(text)
-    except ValueError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
+algorithms_option = _option(parse_algorithms)   # a comma-separated list of algorithms
+algorithm_option = _option(check_algorithm)     # one algorithm
