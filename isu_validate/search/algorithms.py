@@ -16,7 +16,7 @@ from pymoo.problems.static import StaticProblem
 from pymoo.core.termination import NoTermination
 
 from ..space import SceneSpace
-from .algorithm_names import ALGORITHMS, check_algorithm
+from .algorithm_names import check_algorithm
 from .operators import CanonicalDuplicateElimination, SceneRepair, SceneSampling
 from .problem import SceneProblem
 
