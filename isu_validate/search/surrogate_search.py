@@ -9,9 +9,10 @@ Each generation (after a first one of random scenes):
    crossover + mutation of parent pairs, mutation alone (failure-seeded local search),
    and fresh random scenes (exploration); every one valid, none tested before;
 3. each slot of the generation draws the surrogate once from its posterior (batch
-   Thompson sampling) and, among the candidates with the lowest fitness under that
-   draw, takes the one farthest from every failure found so far and every candidate
-   chosen before it.  Confident weaknesses are exploited, uncertain regions still get
+   Thompson sampling), scores every candidate by the loss it would reach beyond the
+   archive's strict tail under that draw (``_scores``) and, among the best-scored share
+   (growing with the archive), takes the one farthest from every failure found so far
+   and every candidate chosen before it.  Confident weaknesses are exploited, uncertain regions still get
    tried, and the failures spread over the space instead of piling onto one region
    (the RQ2 entropy of failure clusters) without a diversity objective that would
    compete with the fitness for selection.

@@ -4,7 +4,8 @@ Default: every algorithm against benchmark SUTs with planted blind spots (no ren
 at equal budgets over several seeds; prints per SUT the failure rate per threshold,
 the ratio to the baseline, Wilcoxon p and A12, RQ2 coverage and entropy of the failure
 clusters, and the search's own time per test.  ``--pipeline`` does the same through
-the real pipeline (render + any ``--sut``), writing resumable run directories.
+the real pipeline (render + any ``--sut``), writing resumable run directories;
+``--emulate RUN_DIR...`` against an emulation of the SUT of stored runs (``emulate.py``).
 """
 from __future__ import annotations
 

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import hashlib
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -42,8 +42,6 @@ class EmulatedSUT:
     chain: ClassifierChain
     outputs: list[tuple[str, str]]     # per chain output: ("occluded" | "wrong", feature)
     seed: int = 0
-    skipped: list[str] = field(default_factory=list)
-    emulated: bool = True
 
     @classmethod
     def fit(cls, space: SceneSpace, run_dirs: list[Path], seed: int = 0) -> "EmulatedSUT":
