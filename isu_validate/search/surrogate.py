@@ -209,6 +209,16 @@ class ErrorModel:
         """(n_draws, n_scenes) plausible losses (Thompson samples, one model draw per row)."""
         return self._loss(canonical_scenes, lambda model, leaves: model.draw(leaves, self.rng, n_draws))
 
+    def sample_rates(self, canonical_scenes: list[dict], n_draws: int) -> tuple[np.ndarray, np.ndarray]:
+        """Thompson draws of every target's error probability, and the weights the judge gives it:
+        ((n_draws, n_scenes, n_targets) rates, (n_scenes, n_targets) weights, 0 where not asked)."""
+        X, asked = self.encoder.encode(canonical_scenes), self._asked_of(canonical_scenes)
+        weights = np.array([self.weights.get(t, 1.0) for t in self.targets]) * asked
+        if not self._models:
+            return np.zeros((n_draws, len(X), len(self.targets))), weights
+        rates = [self._models[t].draw(self._models[t].leaves(X), self.rng, n_draws) for t in self.targets]
+        return np.stack(rates, axis=2), weights
+
     def _loss(self, canonical_scenes: list[dict], rates) -> np.ndarray:
         if not self._models or not canonical_scenes:
             return np.zeros((1, len(canonical_scenes)))

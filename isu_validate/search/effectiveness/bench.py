@@ -4,7 +4,8 @@ Default: every algorithm against benchmark SUTs with planted blind spots (no ren
 at equal budgets over several seeds; prints per SUT the failure rate per threshold,
 the ratio to the baseline, Wilcoxon p and A12, RQ2 coverage and entropy of the failure
 clusters, and the search's own time per test.  ``--pipeline`` does the same through
-the real pipeline (render + any ``--sut``), writing resumable run directories.
+the real pipeline (render + any ``--sut``), writing resumable run directories;
+``--emulate RUN_DIR...`` against an emulation of the SUT of stored runs (``emulate.py``).
 """
 from __future__ import annotations
 
@@ -16,6 +17,7 @@ from pathlib import Path
 from ...space import load_space
 from ..algorithm_names import ALGORITHMS, algorithm_option, algorithms_option
 from .diagnosis import diagnose
+from .emulate import EmulatedSUT
 from .harness import simulate
 from .pipeline_runs import PipelineSettings, run_all
 from .summary import summarize
@@ -37,6 +39,9 @@ def register_bench(sub) -> None:
     p.add_argument("--space", default="isu-paper")
     p.add_argument("--clusters", type=int, default=10, help="k of the RQ2 failure clusters (default 10)")
     p.add_argument("--json", type=Path, help="also write the summaries as JSON here")
+    p.add_argument("--emulate", nargs="+", type=Path, metavar="RUN_DIR",
+                   help="instead of the benchmark SUTs: an EMULATION of the SUT of these stored VQA runs "
+                        "(per-feature errors and occlusion learnt from them), to tune the search without calling it")
     p.add_argument("--diagnose", action="store_true",
                    help="instead: why nsga2 barely beats rs (variants with one cause removed, per-generation trace)")
     p.add_argument("--pop-sizes", default="10,20,30", help="population sizes nsga2 is also tried with (--diagnose)")
@@ -61,6 +66,8 @@ def _check(args) -> list[str]:
     algorithms = args.algorithms
     if args.seeds < 1 or args.budget < 1 or args.pop_size < 2:
         raise ValueError("--seeds and --budget must be at least 1 and --pop-size at least 2")
+    if args.emulate and (args.pipeline or args.diagnose):
+        raise ValueError("--emulate runs the in-memory benchmark; leave out --pipeline and --diagnose")
     if args.pipeline and args.out is None:
         raise ValueError("--pipeline writes run directories: give them a folder with --out (rerun it to resume)")
     return algorithms
@@ -80,8 +87,9 @@ def cmd_bench_effectiveness(args) -> int:
     if args.pipeline:
         summaries.append(_pipeline(args, space, algorithms, seeds))
     else:
-        for name in _names(args.suts):
-            sut = make_benchmark_sut(name, space)
+        suts = [EmulatedSUT.fit(space, args.emulate)] if args.emulate else \
+            [make_benchmark_sut(name, space) for name in _names(args.suts)]
+        for sut in suts:
             start = time.perf_counter()
             outcomes = [simulate(space, sut, algo, seed, args.budget, args.pop_size)
                         for seed in seeds for algo in algorithms]

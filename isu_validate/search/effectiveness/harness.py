@@ -22,7 +22,6 @@ from ...space import SceneSpace
 from ..algorithms import make_algorithm
 from ..diversity import DiversityTracker
 from ..loop import _objectives
-from .suts import BenchmarkSUT
 
 
 @dataclass
@@ -44,18 +43,19 @@ class Outcome:
 
 
 class InstantEvaluation:
-    """A benchmark SUT answering and the real VQA judge scoring: a verdict in microseconds."""
+    """A benchmark (or emulated) SUT answering and the real VQA judge scoring: a verdict in microseconds."""
 
-    def __init__(self, space: SceneSpace, sut: BenchmarkSUT, threshold: float | None = None):
+    def __init__(self, space: SceneSpace, sut, threshold: float | None = None):
         self.space, self.sut, self.judge = space, sut, VQAJudge(space, threshold)
 
     def __call__(self, canonical: dict) -> tuple[dict, Verdict]:
         answers = self.sut.answer(self.space, canonical)
         request = SUTRequest(mode="vqa", image=Path(""), prompt="", questions=self.space.questions(canonical))
-        return answers, self.judge.judge(canonical, request, SUTResponse(raw=repr(answers), answers=answers))
+        occluded = self.sut.occluded(self.space, canonical)
+        return answers, self.judge.judge(canonical, request, SUTResponse(raw=repr(answers), answers=answers), occluded)
 
 
-def simulate(space: SceneSpace, sut: BenchmarkSUT, algorithm: str, seed: int, budget: int, pop_size: int,
+def simulate(space: SceneSpace, sut, algorithm: str, seed: int, budget: int, pop_size: int,
              threshold: float | None = None, make=None) -> Outcome:
     """One run of ``algorithm`` (a name, or ``make(space, pop_size, seed)`` builds the search)."""
     search = make(space, pop_size, seed) if make else make_algorithm(algorithm, space, pop_size, seed)

@@ -65,6 +65,10 @@ class BenchmarkSUT:
                 answers[q.key] = _other(options[q.key], answers[q.key], pick)
         return answers
 
+    def occluded(self, space: SceneSpace, canonical: Mapping[str, Any]) -> list[str]:
+        """Features the frame would hide: none, a benchmark SUT sees the scene itself."""
+        return []
+
     def _rng(self, scene_key: str) -> np.random.Generator:
         digest = hashlib.sha1(f"{self.name}|{self.seed}|{scene_key}".encode()).digest()
         return np.random.default_rng(int.from_bytes(digest[:8], "little"))
