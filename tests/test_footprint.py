@@ -7,7 +7,7 @@ import pytest
 
 from isu_validate.render import load_camera
 from isu_validate.render.footprint import (NEAR_M, clip_near, facing_camera, fill_parts, fill_triangles, footprints,
-                                           orientation, pack, project, unpack_counts)
+                                           is_closed, orientation, pack, project, unpack_counts)
 
 SQUARE = np.array([[[10, 10], [20, 10], [20, 20]], [[10, 10], [20, 20], [10, 20]]], float)
 
@@ -82,6 +82,9 @@ def test_closed_mesh_orientation_and_culling_keep_the_silhouette():
     assert orientation(v, faces) == 1 and orientation(v, faces[:, ::-1]) == -1
     assert orientation(v, faces[1:]) == 0                               # a hole: open
     assert orientation(v, np.concatenate([faces[:1, ::-1], faces[1:]])) == 0   # inconsistent winding
+    # the topology check, cached across frames by the worker, decides alone once given
+    assert is_closed(faces) and not is_closed(faces[1:]) and not is_closed(faces[:0])
+    assert orientation(v, faces, closed=False) == 0 and orientation(-v, faces, closed=True) == -1
     R = np.array([[0.8, 0.0, 0.6], [0.0, 1.0, 0.0], [-0.6, 0.0, 0.8]]) @ np.array([[1, 0, 0], [0, 0.8, -0.6], [0, 0.6, 0.8]])
     tris = (v @ (0.3 * R).T + [0.05, -0.02, 1.2])[faces]               # rotated, scaled, 1.2 m away
     front = facing_camera(tris, 1)

@@ -32,9 +32,6 @@ CODRIVER_SEAT = ("phone_codriver_seat", "colacan_codriver_seat", "colabottle_cod
 # the context in which each feature is active, and the instance whose mask it must change
 # (None: it changes colour or light, checked through pixels inside `region` or over the whole image)
 CONTEXT = {"child_seat": {"child": "YES", "child_seat_orientation": "FRONT_FACING"},
-           # the phone low by the door (P8) leaves the mirror camera's view behind the wheel for most bodies
-           # (a visibility share of 0-0.2: the label calls it occluded); a tall heavy driver shows it
-           "phone_position": {"driver_height": "H4", "driver_weight": "W4"},
            "child": {"child_seat": "YES", "child_seat_orientation": "FRONT_FACING"},
            "child_seat_orientation": {"child_seat": "YES", "child": "YES"},
            "luggage": {"luggage_orientation": 60.0, "luggage_position": "BACK", "luggage_colour": "YELLOW"},

@@ -99,22 +99,28 @@ def footprints(parts_cam: list[np.ndarray], f: float, cx: float, cy: float, widt
     return fill_parts([project(clip_near(t), f, cx, cy) for t in parts_cam], width, height)
 
 
-def orientation(vertices: np.ndarray, faces: np.ndarray) -> int:
+def orientation(vertices: np.ndarray, faces: np.ndarray, closed: bool | None = None) -> int:
     """+1 for a closed mesh whose triangles all wind outwards, -1 all inwards, 0 for an open or
     inconsistently wound one. Seen from outside, a closed mesh's silhouette is the union of its
-    camera-facing triangles, so the others can be dropped (half the work); open meshes keep all."""
-    if not len(faces):
-        return 0
-    directed = np.stack([faces, np.roll(faces, -1, axis=1)], axis=-1).reshape(-1, 2).astype(np.int64)
-    n = int(directed.max()) + 1
-    forward = directed[:, 0] * n + directed[:, 1]
-    backward = directed[:, 1] * n + directed[:, 0]
-    # closed and consistent: every directed edge once, and its reverse present exactly once too
-    if len(np.unique(forward)) != len(forward) or not np.array_equal(np.sort(forward), np.sort(backward)):
+    camera-facing triangles, so the others can be dropped (half the work); open meshes keep all.
+    ``closed`` (from ``is_closed(faces)``) skips the edge check, which depends on the faces only."""
+    if not len(faces) or not (is_closed(faces) if closed is None else closed):
         return 0
     a, b, c = (vertices[faces[:, k]] for k in range(3))
     volume = np.einsum("ij,ij->", a, np.cross(b, c))   # six times the signed volume
     return int(np.sign(volume))
+
+
+def is_closed(faces: np.ndarray) -> bool:
+    """Whether triangles (F,3) form a closed, consistently wound surface: every directed edge once,
+    and its reverse present exactly once too."""
+    if not len(faces):
+        return False
+    directed = np.stack([faces, np.roll(faces, -1, axis=1)], axis=-1).reshape(-1, 2).astype(np.int64)
+    n = int(directed.max()) + 1
+    forward = directed[:, 0] * n + directed[:, 1]
+    backward = directed[:, 1] * n + directed[:, 0]
+    return len(np.unique(forward)) == len(forward) and np.array_equal(np.sort(forward), np.sort(backward))
 
 
 def facing_camera(triangles_cam: np.ndarray, orient: int) -> np.ndarray:

@@ -30,7 +30,7 @@ from .worker import BlenderWorker, WorkerCrashed, WorkerFailed, WorkerTimeout
 
 # bump when the scene content or the outputs change: it is part of every cache key
 # 2: driver_face part, footprints; 3: the phone, can and bottle lie on the co-driver seat; 4: anny people
-RENDERER_VERSION = "isu-blender-4"
+RENDERER_VERSION = "isu-blender-5"
 
 # what the worker shows for a feature the scene space does not have (or that is inactive)
 DEFAULTS = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height": "H2", "driver_weight": "W2",

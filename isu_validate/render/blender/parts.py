@@ -7,13 +7,26 @@ A part is whatever carries its pass index: procedural builds, imported assets, o
 vertices the host replaces, with nothing to declare beyond the pass index."""
 from __future__ import annotations
 
+import hashlib
 import time
 
 import bpy
 import numpy as np
 
-from ..footprint import facing_camera, footprints, orientation, pack
+from ..footprint import facing_camera, footprints, is_closed, orientation, pack
 from ..labels import INSTANCE_ID
+
+
+# closedness of a face list, by its bytes' digest: it depends on the topology only, which a person
+# keeps from frame to frame while its vertices move (the edge check was ~35 ms per person mesh a frame)
+_CLOSED: dict[bytes, bool] = {}
+
+
+def _closed(faces: np.ndarray) -> bool:
+    key = hashlib.blake2b(faces.tobytes(), digest_size=16).digest()
+    if key not in _CLOSED:
+        _CLOSED[key] = is_closed(faces)
+    return _CLOSED[key]
 
 
 def _triangles(obj, depsgraph, cache: dict, R: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -33,7 +46,7 @@ def _triangles(obj, depsgraph, cache: dict, R: np.ndarray, t: np.ndarray) -> np.
             idx = np.empty(len(mesh.loop_triangles) * 3, np.int64)
             mesh.loop_triangles.foreach_get("vertices", idx)
             vertices, faces = co.reshape(-1, 3), idx.reshape(-1, 3)
-            local = (vertices, faces, orientation(vertices, faces))
+            local = (vertices, faces, orientation(vertices, faces, _closed(faces)))
         finally:
             if not plain:
                 evaluated.to_mesh_clear()
