@@ -25,9 +25,9 @@ class Preset:
         return d
 
 
-# Measured on the shared 2-core machine with `isu-validate bench render` (see the issue for the table):
-# per-pixel path tracing dominates (about 1.5 CPU-seconds per sample at 640x480), the fixed cost per
-# frame is ~0.5 CPU-s, so presets trade samples and resolution. OIDN with albedo/normal guides makes
+# Measured on the 2-core machine with `isu-validate bench render` (table in render/README.md): per-pixel
+# path tracing dominates (1.6-1.8 CPU-seconds per sample at 640x480 with the people), OpenImageDenoise at
+# 640x480 ~1.2 CPU-s (its FAST quality drops standard's SSIM to 0.9695), so presets trade samples and resolution. OIDN with albedo/normal guides makes
 # 1-2 samples usable; extra bounces beyond 2 changed SSIM by < 0.001 here.
 PRESETS = {
     "draft": Preset("draft", 0.5, 1, True, "FAST", 2, 1, 1, 3.0, 1.5),
