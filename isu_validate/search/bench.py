@@ -103,11 +103,15 @@ def cmd_bench_search(args) -> int:
             total = time.perf_counter() - start
         print(f"search overhead ({algorithm}, pop {args.pop_size}, space {args.space}; "
               f"archive commits durable: SQLite WAL, synchronous=FULL)")
-        print(f"{'archive size':>12}  {'ms/test':>8}  {'search':>7}  {'commit':>7}  {'CPU':>6}  goal (ms/test)")
+        print(f"{'archive size':>12}  {'ms/test':>8}  {'search':>7}  {'commit':>7}  {'CPU':>6}  overhead  goal (ms/test)")
         for r in results:
-            verdict = "ok" if r["ms_per_test"] < 5 else "over"
+            overhead = r["search_ms_per_test"] + r["commit_ms_per_test"]
+            verdict = "ok" if overhead < 5 else "over"
             print(f"{r['size']:>12}  {r['ms_per_test']:>8.2f}  {r['search_ms_per_test']:>7.2f}  "
-                  f"{r['commit_ms_per_test']:>7.2f}  {r['cpu_ms_per_test']:>6.2f}  < 5 ms ({verdict})")
-        print("  search: ask + diversity + tell; commit: the durable archive write; CPU: this process, all parts")
+                  f"{r['commit_ms_per_test']:>7.2f}  {r['cpu_ms_per_test']:>6.2f}  {overhead:>8.2f}  < 5 ms ({verdict})")
+        print("  search: ask + diversity + tell; commit: the durable archive write; overhead: search + commit,\n"
+              "  what the search adds to a test (the goal); ms/test: the whole loop, including the benchmark\n"
+              "  SUT's in-memory answers and judging, which a real run replaces by a render and a SUT call;\n"
+              "  CPU: this process, all parts")
         print(f"total {total:.1f} s for {max(sizes)} tests\n", flush=True)
     return 0
