@@ -158,3 +158,12 @@ def test_people_commands_warm_and_check_the_cache(people, capsys):
     assert main(["people", "check", "--limit", "1", "--cache", str(people.store.root)]) == 0
     out = capsys.readouterr().out
     assert "clear_wheel_hands" in out and "belt_lap_resting" in out and "child_rear_clear_cs_platepad" in out
+
+
+def test_people_check_ranks_a_belt_into_the_body_worse_than_one_off_it():
+    """`people check` reports the worst body per figure: smaller is worse for clearances and a belt's
+    distance to the body (negative: through it), a larger gap for the phone in the palm."""
+    from isu_validate.render.people.warm import is_worse
+    assert is_worse("belt_lap_min", -0.001, 0.020) and not is_worse("belt_lap_min", 0.020, -0.001)
+    assert is_worse("clear_wheel_hands", -0.01, 0.0) and is_worse("belt_diagonal_resting", 0.4, 0.6)
+    assert is_worse("phone_to_palm", 0.03, 0.01) and is_worse("phone_to_palm", -0.03, 0.01)

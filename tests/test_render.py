@@ -144,15 +144,6 @@ def test_the_codriver_seat_objects_lie_on_the_cushion_apart_from_each_other(rend
     assert set(CODRIVER_SEAT).isdisjoint(renderer.bounds(BASE))
 
 
-def _projected_rows(renderer, box) -> np.ndarray:
-    """Image rows of the 8 corners of a cabin-frame bounding box, through the render camera."""
-    import itertools
-    corners = np.array(list(itertools.product(*zip(box[0], box[1]))))
-    rig, plan = renderer.render_rig, renderer.plan
-    cam = (corners - np.array(rig.position)) @ np.array(rig.rotation)    # cabin -> OpenCV camera frame
-    return plan.f * cam[:, 1] / cam[:, 2] + plan.cy
-
-
 def test_the_default_camera_frames_the_tallest_drivers_head_and_shows_p8(renderer, frames):
     """The rig's framing, measured from the geometry: the head (hair included) of the tallest, heaviest
     driver stays inside the frame (its bounding box's top corner at most 2% of the height above the
@@ -161,7 +152,8 @@ def test_the_default_camera_frames_the_tallest_drivers_head_and_shows_p8(rendere
     height = renderer.render_rig.height
     for gender in ("MALE", "FEMALE"):
         box = renderer.bounds({**BASE, "driver_gender": gender, "driver_height": "H4", "driver_weight": "W4"})["driver_face"]
-        top = _projected_rows(renderer, box).min()
+        corners = np.array(np.meshgrid(*zip(*box))).reshape(3, -1).T      # the box's 8 corners
+        top = renderer.render_rig.project(corners)[:, 1].min()
         assert top >= -0.02 * height, f"a tall {gender.lower()} driver's head is cut: its top at row {top:.1f}"
     *_, result = frames({**BASE, "phone_position": "P8"})
     assert result.visibility["phone_position"] >= 0.4 and "phone_position" not in result.occluded

@@ -14,6 +14,8 @@ from ..space import SceneSpace
 
 def nothing_to_judge(space: SceneSpace, scene: Mapping[str, Any], occluded: Collection[str]) -> str | None:
     """Why the frame of ``scene`` shows nothing the SUT would be asked about, or None when it shows something."""
+    if not occluded:          # the common case: nothing hidden, no questions to work out
+        return None
     asked = [q.key for q in space.questions(scene)]
     if asked and set(asked) <= set(occluded):
         return (f"unusable frame: every feature asked about is occluded ({', '.join(asked)}), so the scene has "

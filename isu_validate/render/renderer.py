@@ -29,7 +29,8 @@ from .visibility import feature_visibility, min_visible_for, needed_parts, part_
 from .worker import BlenderWorker, WorkerCrashed, WorkerFailed, WorkerTimeout
 
 # bump when the scene content or the outputs change: it is part of every cache key
-# 2: driver_face part, footprints; 3: the phone, can and bottle lie on the co-driver seat; 4: anny people
+# 2: driver_face part, footprints; 3: the phone, can and bottle lie on the co-driver seat; 4: anny people;
+# 5: the camera frames tall drivers' heads, P8 by the door in view, light tree off
 RENDERER_VERSION = "isu-blender-5"
 
 # what the worker shows for a feature the scene space does not have (or that is inactive)

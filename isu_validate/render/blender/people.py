@@ -41,6 +41,7 @@ class Person:
         self.name, self.coll, self.body_id, self.head_id = name, coll, body_id, head_id
         self.topology_path = None
         self.state_path = None
+        self.state: dict = {}        # the arrays of state_path: a scene seen again loads nothing
         self.parts: dict[str, bpy.types.Object] = {}
         self.maps: dict[str, np.ndarray] = {}
         self.materials: dict[str, bpy.types.Material] = {}
@@ -56,8 +57,8 @@ class Person:
             self._build(_load(topology))
             self.topology_path = topology
             self.state_path = None
-        data = _load(state)
         if state != self.state_path:
+            data = self.state = _load(state)
             for part, index in self.maps.items():
                 source = data["hair"] if part == "hair" else data["vertices"][index]
                 mesh = self.parts[part].data
@@ -65,7 +66,7 @@ class Person:
                 mesh.update()
             self.state_path = state
         self.show(True)
-        return data
+        return self.state
 
     # ------------------------------------------------------------------ building
     def _build(self, topo: dict) -> None:

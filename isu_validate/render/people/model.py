@@ -26,6 +26,7 @@ def anny_cache_dir() -> Path:
     return Path(os.environ.get("ANNY_CACHE_DIR") or Path(sys.prefix) / "share" / "anny")
 
 
+@lru_cache(maxsize=1)
 def anny_version() -> str:
     from importlib.metadata import PackageNotFoundError, version
     try:

@@ -9,7 +9,6 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
-import time
 
 import numpy as np
 
@@ -17,7 +16,7 @@ from . import belt, child, expressions, hair, regions, seated
 from .model import load_model
 from .phenotype import child_phenotype, driver_phenotype
 from .skeleton import Body
-from .store import PeopleStore, entry_key
+from .store import PeopleStore, entry_key, load_entry
 
 KINDS = ("male", "female", "child")
 JOINTS = ("root", "spine01", "neck01", "head")    # bone heads a state keeps (for measuring a pose)
@@ -40,7 +39,6 @@ class People:
         self.driver_rig = rig_part_hash(cabin, _DRIVER_RIG)
         self.child_rig = rig_part_hash(cabin, _CHILD_RIG)
         self.misses = 0           # entries posed by this process (each a miss of the store)
-        self.last_miss_s = 0.0
 
     # ------------------------------------------------------------------ what the worker gets
     def for_scene(self, f: dict, with_driver: bool = True) -> dict:
@@ -64,7 +62,7 @@ class People:
         found = self.store.get("topology", key)
         if found:
             return found
-        with _timed(self):
+        with _posing(self):
             return self.store.put("topology", key, _topology(kind))
 
     def driver_state(self, gender: str, height: str, weight: str, emotion: str, phone_position: str):
@@ -74,10 +72,10 @@ class People:
         found = self.store.get("driver", key)
         if found:
             return found
-        with _timed(self):
+        with _posing(self):
             pose = self._driver_pose(gender, height, weight, phone_position)
             kind = "female" if gender == "FEMALE" else "male"
-            topo = _load_npz(self.topology(kind))
+            topo = load_entry(self.topology(kind))
             body = Body(load_model(), driver_phenotype(gender, height, weight), expressions.facial_actions(emotion))
             posed = body.evaluate(_deltas_from(pose))
             state = {**_surface_state(posed, topo), **{k: pose[k] for k in pose if not k.startswith("d_")}}
@@ -88,8 +86,8 @@ class People:
         found = self.store.get("child", key)
         if found:
             return found
-        with _timed(self):
-            topo = _load_npz(self.topology("child"))
+        with _posing(self):
+            topo = load_entry(self.topology("child"))
             body = Body(load_model(), child_phenotype("FRONT_FACING" if front_facing else "REAR_FACING"),
                         expressions.facial_actions("NEUTRAL"))
             posed = child.pose_child(body, front_facing, self.cabin["anchors"]["child_seat"])
@@ -161,9 +159,6 @@ def _deltas_from(record: dict) -> dict:
     return {k[2:]: record[k] for k in record if k.startswith("d_")}
 
 
-def _load_npz(path) -> dict:
-    with np.load(path, allow_pickle=False) as data:
-        return {k: data[k] for k in data.files}
 
 
 def _dig(d: dict, dotted: str):
@@ -173,15 +168,13 @@ def _dig(d: dict, dotted: str):
 
 
 @contextlib.contextmanager
-def _timed(people: People):
+def _posing(people: People):
     """Count a miss; pose single-threaded (torch's two threads only fight on a shared machine)."""
     import torch
     people.misses += 1
     threads = torch.get_num_threads()
     torch.set_num_threads(1)
-    t = time.perf_counter()
     try:
         yield
     finally:
         torch.set_num_threads(threads)
-        people.last_miss_s = time.perf_counter() - t

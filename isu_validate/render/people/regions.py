@@ -18,7 +18,6 @@ from .skeleton import Body, Posed
 # material slots per triangle, in the order the Blender side creates them; "body" is skin and clothes
 SLOTS = ("body", "eye_white", "iris", "mouth")
 SLOT = {name: i for i, name in enumerate(SLOTS)}
-FIELDS = ("shirt", "trousers", "shoes", "brows", "suit")
 
 _ARM = ("upperarm", "lowerarm", "wrist", "finger", "metacarpal")
 _NECK_HEAD = ("neck", "head", "eye")

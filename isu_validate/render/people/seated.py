@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..cabin_geometry import RIM_TUBE, rim_point, seat_boxes, wheel_frame, wheel_solids
+from ..cabin_geometry import RIM_TUBE, rim_point, seat_boxes, wheel_frame
 from .hands import HandFrame, curl, hand_frame, turn_to, wrap
 from .limbs import Limb, reach
 from .regions import bone_weights
@@ -242,9 +242,3 @@ def _unit(v) -> np.ndarray:
     v = np.asarray(v, float)
     return v / np.linalg.norm(v)
 
-
-def clearances(posed: Posed, rig: dict, seat_shift: float = 0.0) -> dict[str, float]:
-    """The smallest signed distance (m) of the body to each seat box and wheel part (negative: inside)."""
-    seat = shifted_seat(rig["seats"]["driver"], seat_shift)
-    solids = [*seat_boxes("driver_seat", seat), *wheel_solids(rig["steering_wheel"])]
-    return {s.name: float(s.sdf(posed.vertices).min()) for s in solids}

@@ -2,7 +2,7 @@
 posed states (vertices in the cabin, hair, belt straps, the phone in the hand), as .npz files.
 
 An entry's key hashes everything that decides its content: the code that made it (PEOPLE_VERSION and
-the source of this package, so a changed pose or region never comes back from an old cache), anny's
+the source of the modules that decide it, ``CONTENT_MODULES``, so a changed pose or region never comes back from an old cache), anny's
 version, the parts of the cabin rig the pose depends on, and the inputs (gender, classes, expression,
 phone position...). Entries are written to a temporary file and renamed into place, so
 the processes of a pool can share the folder. It lives beside anny's model cache (``ANNY_CACHE_DIR``,
@@ -28,12 +28,18 @@ def people_cache_dir() -> Path:
     return Path(os.environ.get("ISU_PEOPLE_CACHE") or anny_cache_dir() / "isu-validate-people")
 
 
+# the modules whose code decides what an entry holds (posing reads the seat and wheel from cabin_geometry);
+# the cache's own tools (store, warm, checks) are not among them, so changing them keeps the cache
+CONTENT_MODULES = ("belt", "child", "expressions", "hair", "hands", "limbs", "model", "people", "phenotype",
+                   "regions", "seated", "skeleton", "surface", "../cabin_geometry")
+
+
 @lru_cache(maxsize=1)
 def code_version() -> str:
-    """PEOPLE_VERSION and a hash of this package's source files."""
+    """PEOPLE_VERSION and a hash of the source of ``CONTENT_MODULES``."""
     digest = hashlib.sha256(PEOPLE_VERSION.encode())
-    for path in sorted(Path(__file__).parent.glob("*.py")):
-        digest.update(path.read_bytes())
+    for name in CONTENT_MODULES:
+        digest.update((Path(__file__).parent / f"{name}.py").read_bytes())
     return f"{PEOPLE_VERSION}-{digest.hexdigest()[:12]}"
 
 
@@ -68,7 +74,10 @@ class PeopleStore:
 
     def load(self, kind: str, key: str) -> dict | None:
         path = self.get(kind, key)
-        if path is None:
-            return None
-        with np.load(path, allow_pickle=False) as data:
-            return {k: data[k] for k in data.files}
+        return None if path is None else load_entry(path)
+
+
+def load_entry(path: str | os.PathLike) -> dict:
+    """An entry's arrays by name."""
+    with np.load(path, allow_pickle=False) as data:
+        return {k: data[k] for k in data.files}

@@ -14,6 +14,7 @@ from ...progress import Progress
 from .checks import child_measures, driver_measures
 from .people import People
 from .phenotype import BMI_BANDS, GENDER, HEIGHT_BANDS
+from .store import load_entry
 
 EMOTIONS = ("HAPPY", "SERIOUS")
 PHONE_POSITIONS = ("NONE",) + tuple(f"P{i}" for i in range(1, 11))
@@ -47,25 +48,26 @@ def check(people: People, limit: int | None = None) -> dict:
     worst: dict[str, tuple[float, tuple]] = {}
     grid = driver_grid(limit)
     progress = Progress(len(grid), label="checked", verdicts=False)
-    topologies = {kind: _load(people.topology(kind)) for kind in ("male", "female")}
+    topologies = {kind: load_entry(people.topology(kind)) for kind in ("male", "female")}
     for key in grid:
         topology = topologies["female" if key[0] == "FEMALE" else "male"]
-        for name, value in driver_measures(_load(people.driver_state(*key)), topology, people.cabin).items():
-            if name.endswith("_resting") or name.startswith("clear"):
-                keep = value < worst.get(name, (np.inf,))[0]          # smaller is worse
-            else:
-                keep = abs(value) > abs(worst.get(name, (0.0,))[0])   # phone_to_palm, belt *_min: larger gap worse
-            if keep or name not in worst:
+        for name, value in driver_measures(load_entry(people.driver_state(*key)), topology, people.cabin).items():
+            if name not in worst or is_worse(name, value, worst[name][0]):
                 worst[name] = (value, key)
         progress.update()
     progress.close()
     for front in (True, False):
-        state = _load(people.child_state(front))
+        state = load_entry(people.child_state(front))
         for name, value in child_measures(state, front, people.cabin["anchors"]["child_seat"]).items():
             worst[f"child_{'front' if front else 'rear'}_{name}"] = (value, ())
     return worst
 
 
-def _load(path) -> dict:
-    with np.load(path, allow_pickle=False) as data:
-        return {k: data[k] for k in data.files}
+def is_worse(name: str, value: float, than: float) -> bool:
+    """Whether a driver figure is worse than another: a clearance, a belt's smallest distance to the body
+    (negative: through it) or its resting share the smaller it is; the phone's gap to the palm the larger."""
+    if name.endswith(("_resting", "_min")) or name.startswith("clear"):
+        return value < than
+    return abs(value) > abs(than)
+
+

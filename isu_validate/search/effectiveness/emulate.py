@@ -16,7 +16,6 @@ its figures are a tuning aid, not a measurement of the real SUT.
 """
 from __future__ import annotations
 
-import hashlib
 import json
 from dataclasses import dataclass
 from pathlib import Path
@@ -26,10 +25,12 @@ import numpy as np
 from sklearn.multioutput import ClassifierChain
 from sklearn.tree import DecisionTreeClassifier
 
+from ...archive import read_records
+from ...evaluate.vqa import CORRECT, OCCLUDED, WRONG
 from ...space import SceneSpace
+from ...archive.run_file import ARCHIVE_FILE, RUN_FILE
 from ..surrogate import SceneEncoder
-from .pipeline_runs import read_outcome
-from .suts import _other
+from .suts import _other, scene_state
 
 MIN_LEAF_SHARE, MIN_LEAF = 0.01, 20   # a tree leaf holds at least this share of the tests (and this many)
 
@@ -88,7 +89,7 @@ class EmulatedSUT:
         key = self.space.key(canonical)
         if self._last[0] == key:  # answer() and occluded() of one scene: one draw
             return self._last[1], self._last[2]
-        state = int.from_bytes(hashlib.sha1(f"{self.name}|{self.seed}|{key}".encode()).digest()[:8], "little")
+        state = scene_state(self.name, self.seed, key)
         rng = np.random.default_rng(state)
         x = self._encoder.encode([dict(canonical)])[0]
         drawn: list[float] = []
@@ -110,17 +111,17 @@ def _status(record, feature: str) -> str:
     item = ((record.details.get("verdict") or {}).get("features") or {}).get(feature)
     if item is None:
         return "not asked"
-    return {"correct": "correct", "occluded": "occluded"}.get(item.get("status"), "wrong")
+    status = item.get("status")
+    return status if status in (CORRECT, OCCLUDED) else WRONG
 
 
 def _stored_records(space: SceneSpace, run_dirs: list[Path]) -> list:
     records = []
     for folder in run_dirs:
-        if not (Path(folder) / "archive.sqlite").exists():
-            raise ValueError(f"{folder}: not a run directory (no archive.sqlite); give finished runs of the SUT "
+        if not (Path(folder) / ARCHIVE_FILE).exists():
+            raise ValueError(f"{folder}: not a run directory (no {ARCHIVE_FILE}); give finished runs of the SUT "
                              "to emulate, e.g. --emulate runs/effect-reference/rs-s*")
-        outcome = read_outcome(Path(folder), "stored", 0, "stored")
-        for record in outcome.records:
+        for record in read_records(Path(folder) / ARCHIVE_FILE):
             if record.errored or record.primary is None:
                 continue
             if not ((record.details.get("verdict") or {}).get("features")):
@@ -140,7 +141,7 @@ def _sut_name(run_dirs: list[Path]) -> str:
     names = set()
     for folder in run_dirs:
         try:
-            names.add(json.loads((Path(folder) / "run.json").read_text())["config"]["pipeline"]["sut"])
+            names.add(json.loads((Path(folder) / RUN_FILE).read_text())["config"]["pipeline"]["sut"])
         except (OSError, KeyError, ValueError):
             names.add("stored SUT")
     return "+".join(sorted(names))

@@ -14,7 +14,7 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from ...archive import Archive
+from ...archive import read_records
 from ...pipeline import PipelineConfig
 from ..loop import ARCHIVE_FILE, RUN_FILE, RunConfig, RunError, run_search
 from .harness import Outcome
@@ -69,9 +69,4 @@ def _config(settings: PipelineSettings, algorithm: str, seed: int, folder: Path)
 
 def read_outcome(folder: Path, algorithm: str, seed: int, sut: str) -> Outcome:
     """A finished run directory as an ``Outcome`` (the search's own time is not stored: None)."""
-    archive = Archive(folder / ARCHIVE_FILE)
-    try:
-        records = list(archive)
-    finally:
-        archive.close()
-    return Outcome(algorithm, seed, sut, records, search_s=None)
+    return Outcome(algorithm, seed, sut, read_records(folder / ARCHIVE_FILE), search_s=None)

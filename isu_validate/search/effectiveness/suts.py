@@ -70,8 +70,12 @@ class BenchmarkSUT:
         return []
 
     def _rng(self, scene_key: str) -> np.random.Generator:
-        digest = hashlib.sha1(f"{self.name}|{self.seed}|{scene_key}".encode()).digest()
-        return np.random.default_rng(int.from_bytes(digest[:8], "little"))
+        return np.random.default_rng(scene_state(self.name, self.seed, scene_key))
+
+
+def scene_state(name: str, seed: int, scene_key: str) -> int:
+    """The seed of a benchmark SUT's draws for one scene: the same scene, the same answers."""
+    return int.from_bytes(hashlib.sha1(f"{name}|{seed}|{scene_key}".encode()).digest()[:8], "little")
 
 
 def _other(options, answer: str, pick: float) -> str:
