@@ -197,6 +197,19 @@ def test_killed_worker_is_restarted_and_the_scene_retried(renderer, tmp_path):
     assert result.image.is_file() and renderer.worker_pid != pid
 
 
+def test_an_output_that_cannot_be_written_is_a_render_error_cached_or_not(renderer, tmp_path, monkeypatch):
+    blocked = tmp_path / "a-file"
+    blocked.write_text("not a folder")
+    scene = {**BASE, "driver_height": "H2", "colacan_codriver_seat": "YES"}
+    renderer.render(scene, tmp_path / "first.png")                  # now in the cache
+    with pytest.raises(RenderError, match="could not write"):       # was a bare FileExistsError
+        renderer.render(scene, blocked / "cached.png")
+    monkeypatch.setattr(renderer, "cache", None)
+    with pytest.raises(RenderError, match="could not write"):
+        renderer.render(scene, blocked / "rendered.png")
+    assert renderer.render(scene, tmp_path / "after.png").image.is_file()
+
+
 def test_render_error_after_the_retry_fails(tmp_path):
     r = open_renderer(TEST_PRESET, log_dir=tmp_path, timeout_s=0.05)
     try:

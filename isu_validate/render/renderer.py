@@ -106,7 +106,10 @@ class BlenderRenderer:
         holds the scene, else rendered and put there. ``developed`` receives what the camera's imaging
         model chose (exposure time, gain, metered level)."""
         t0 = time.perf_counter()
-        hit = self.cache.get(key, out, channel_paths(out)) if self.cache else None
+        try:
+            hit = self.cache.get(key, out, channel_paths(out)) if self.cache else None
+        except OSError as exc:   # the output cannot be written (the cached files are intact)
+            raise RenderError(f"could not write the render of this scene to {out}: {exc}") from exc
         if hit:
             timings = {"update_s": 0.0, "render_s": 0.0, "write_s": time.perf_counter() - t0}
             developed["exposure"] = hit["meta"].get("exposure")
