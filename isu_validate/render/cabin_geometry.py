@@ -75,6 +75,38 @@ def rot_y(angle_rad: float) -> np.ndarray:
 RIM_TUBE = 0.12   # tube radius of the rim as a share of the wheel's radius
 
 
+CARRIER_RECLINE_DEG = 35.0   # the rear-facing carrier's back plate, from the horizontal
+CHILD_SEAT_PADS = ("cs_cushion", "cs_backpad", "cs_platepad")   # fabric; the other parts are the plastic shell
+
+
+def child_seat_boxes(front_facing: bool) -> list[Box]:
+    """The child seat's shell and pads in its local frame (facing +x, origin at the centre of its base),
+    in the order Blender builds them. Front-facing: an upright booster with
+    a tall back and side wings; rear-facing: a reclined infant carrier (its carry handle, which the
+    child never touches, is built in Blender only)."""
+    if front_facing:
+        tilt = rot_y(-0.12)
+        boxes = [Box("cs_base", (0.0, 0.0, 0.07), (0.42, 0.42, 0.14), np.eye(3), 0.1),
+                 Box("cs_cushion", (0.03, 0.0, 0.16), (0.34, 0.32, 0.06), np.eye(3), 0.3),
+                 Box("cs_back", (-0.17, 0.0, 0.44), (0.08, 0.40, 0.62), tilt, 0.2),
+                 Box("cs_backpad", (-0.12, 0.0, 0.42), (0.03, 0.30, 0.52), tilt, 0.3)]
+        for side in (1, -1):
+            boxes += [Box(f"cs_wing{side}", (-0.06, side * 0.20, 0.33), (0.26, 0.05, 0.34), np.eye(3), 0.2),
+                      Box(f"cs_headwing{side}", (-0.12, side * 0.17, 0.66), (0.18, 0.05, 0.20), np.eye(3), 0.2)]
+        return boxes
+    recline = rot_y(-math.radians(CARRIER_RECLINE_DEG))
+    return [Box("cs_base", (0.0, 0.0, 0.06), (0.46, 0.40, 0.12), np.eye(3), 0.1),
+            Box("cs_plate", (0.04, 0.0, 0.26), (0.56, 0.38, 0.06), recline, 0.2),
+            Box("cs_platepad", (0.02, 0.0, 0.29), (0.50, 0.30, 0.03), recline, 0.3),
+            Box("cs_side1", (0.02, 0.19, 0.30), (0.52, 0.04, 0.20), recline, 0.2),
+            Box("cs_side-1", (0.02, -0.19, 0.30), (0.52, 0.04, 0.20), recline, 0.2)]
+
+
+def pitch(box: Box) -> float:
+    """The angle about y of a box that turns about y only (as Blender's Euler y)."""
+    return math.atan2(-box.R[2, 0], box.R[0, 0])
+
+
 def seat_boxes(name: str, seat: dict) -> list[Box]:
     """Cushion, base, tilted backrest and headrest(s) from the rig's cushion top-centre point."""
     cx, cy, cz = seat["cushion"]

@@ -6,7 +6,7 @@ import math
 
 from mathutils import Euler, Vector
 
-from ..cabin_geometry import RIM_TUBE, seat_boxes
+from ..cabin_geometry import RIM_TUBE, pitch, seat_boxes
 from ..cabin_geometry import wheel_frame as geometry_wheel_frame
 from ..labels import INSTANCE_ID
 from . import mesh as M
@@ -88,9 +88,8 @@ def _seat(name, seat, coll, pid):
     plastic = M.material("plastic", PLASTIC)
     parts = []
     for box in seat_boxes(name, seat):
-        angle = math.atan2(-box.R[2, 0], box.R[0, 0])      # the boxes turn about y only
         parts.append(M.box(box.name, box.centre, box.size, plastic if box.name.endswith("_base") else fabric,
-                           coll, pid, rotation=(0, angle, 0), rounded=box.rounded))
+                           coll, pid, rotation=(0, pitch(box), 0), rounded=box.rounded))
     return parts
 
 

@@ -9,6 +9,7 @@ import math
 import bpy
 from mathutils import Vector
 
+from ..cabin_geometry import CHILD_SEAT_PADS, child_seat_boxes, pitch
 from ..labels import INSTANCE_ID
 from . import mesh as M
 from .cabin import euler_deg
@@ -40,29 +41,16 @@ class Group:
 
 # ---------------------------------------------------------------------- builders (local coordinates)
 def build_child_seat(coll, front_facing: bool) -> Group:
-    """Front-facing: upright booster shell with tall back and side wings, facing +x.
-    Rear-facing: a reclined infant carrier with a carry handle whose child looks towards the rear."""
+    """The shell and pads of ``cabin_geometry.child_seat_boxes`` (which the child's posing sits on), and
+    the rear-facing carrier's carry handle."""
     g = Group("child_seat_" + ("front" if front_facing else "rear"), coll)
     pid = INSTANCE_ID["child_seat"]
     shell = M.material("child_seat_shell", (0.03, 0.03, 0.035), roughness=0.6)
     pad = M.material("child_seat_pad", (0.30, 0.02, 0.02), roughness=0.9)
-    if front_facing:
-        g.add(M.box("cs_base", (0.0, 0, 0.07), (0.42, 0.42, 0.14), shell, coll, pid, rounded=0.1))
-        g.add(M.box("cs_cushion", (0.03, 0, 0.16), (0.34, 0.32, 0.06), pad, coll, pid, rounded=0.3))
-        g.add(M.box("cs_back", (-0.17, 0, 0.44), (0.08, 0.40, 0.62), shell, coll, pid, rounded=0.2, rotation=(0, -0.12, 0)))
-        g.add(M.box("cs_backpad", (-0.12, 0, 0.42), (0.03, 0.30, 0.52), pad, coll, pid, rounded=0.3, rotation=(0, -0.12, 0)))
-        for side in (1, -1):
-            g.add(M.box(f"cs_wing{side}", (-0.06, side * 0.20, 0.33), (0.26, 0.05, 0.34), shell, coll, pid, rounded=0.2))
-            g.add(M.box(f"cs_headwing{side}", (-0.12, side * 0.17, 0.66), (0.18, 0.05, 0.20), shell, coll, pid, rounded=0.2))
-    else:
-        # the carrier's back plate rises towards the dashboard (+x): the child lies facing the rear, up
-        recline = math.radians(35)
-        g.add(M.box("cs_base", (0.0, 0, 0.06), (0.46, 0.40, 0.12), shell, coll, pid, rounded=0.1))
-        g.add(M.box("cs_plate", (0.04, 0, 0.26), (0.56, 0.38, 0.06), shell, coll, pid, rounded=0.2, rotation=(0, -recline, 0)))
-        g.add(M.box("cs_platepad", (0.02, 0, 0.29), (0.50, 0.30, 0.03), pad, coll, pid, rounded=0.3, rotation=(0, -recline, 0)))
-        for side in (1, -1):
-            g.add(M.box(f"cs_side{side}", (0.02, side * 0.19, 0.30), (0.52, 0.04, 0.20), shell, coll, pid, rounded=0.2,
-                        rotation=(0, -recline, 0)))
+    for box in child_seat_boxes(front_facing):
+        g.add(M.box(box.name, box.centre, box.size, pad if box.name in CHILD_SEAT_PADS else shell, coll, pid,
+                    rounded=box.rounded, rotation=(0, pitch(box), 0)))
+    if not front_facing:
         handle = g.add(M.new_object("cs_handle", M.unit_torus(1.0, 0.09), shell, coll, pid))
         handle.location, handle.rotation_euler, handle.scale = (0.0, 0, 0.30), (math.pi / 2, 0, 0), (0.2, 0.2, 0.2)
     return g

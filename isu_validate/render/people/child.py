@@ -2,7 +2,7 @@
 half years old), or a one-year-old lying reclined in the rear-facing carrier (its back on the carrier's
 inclined plate, facing the rear), hands on the lap or the belly.
 
-The seat's surfaces mirror ``render/blender/objects.py::build_child_seat`` (local frame: the seat faces
+The seat's surfaces are ``cabin_geometry.child_seat_boxes``, which Blender builds too (local frame: the seat faces
 +x, origin at the centre of its base, placed at the cabin rig's ``anchors.child_seat``)."""
 from __future__ import annotations
 
@@ -10,32 +10,13 @@ import math
 
 import numpy as np
 
-from ..cabin_geometry import Box, rot_y
+from ..cabin_geometry import CARRIER_RECLINE_DEG, child_seat_boxes
 from .limbs import Limb, reach
 from .regions import bone_weights
 from .skeleton import Body, Posed, rigid, rot_x, rot_z, rotation
 
 GAP = 0.004
-CARRIER_RECLINE_DEG = 35.0
 HIPS_ON_PLATE = -0.13      # the lying child's hip joints this far from the plate's middle, down the slope (m)
-
-
-def child_seat_boxes(front_facing: bool) -> list[Box]:
-    """The parts of the child seat the child touches (seat-local frame)."""
-    if front_facing:
-        tilt = rot_y(-0.12)
-        return [Box("cs_cushion", (0.03, 0.0, 0.16), (0.34, 0.32, 0.06), np.eye(3)),
-                Box("cs_base", (0.0, 0.0, 0.07), (0.42, 0.42, 0.14), np.eye(3)),
-                Box("cs_backpad", (-0.12, 0.0, 0.42), (0.03, 0.30, 0.52), tilt),
-                Box("cs_back", (-0.17, 0.0, 0.44), (0.08, 0.40, 0.62), tilt),
-                Box("cs_wing1", (-0.06, 0.20, 0.33), (0.26, 0.05, 0.34), np.eye(3)),
-                Box("cs_wing-1", (-0.06, -0.20, 0.33), (0.26, 0.05, 0.34), np.eye(3))]
-    recline = rot_y(-math.radians(CARRIER_RECLINE_DEG))
-    return [Box("cs_platepad", (0.02, 0.0, 0.29), (0.50, 0.30, 0.03), recline),
-            Box("cs_plate", (0.04, 0.0, 0.26), (0.56, 0.38, 0.06), recline),
-            Box("cs_base", (0.0, 0.0, 0.06), (0.46, 0.40, 0.12), np.eye(3)),
-            Box("cs_side1", (0.02, 0.19, 0.30), (0.52, 0.04, 0.20), recline),
-            Box("cs_side-1", (0.02, -0.19, 0.30), (0.52, 0.04, 0.20), recline)]
 
 
 def _seated_legs() -> dict:
