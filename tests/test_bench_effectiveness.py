@@ -11,7 +11,8 @@ from isu_validate.archive import TestRecord as Record  # (a Test* name would be 
 from isu_validate.cli import main
 from isu_validate.protocols import SUTRequest
 from isu_validate.search.effectiveness.harness import Outcome
-from isu_validate.search.effectiveness.summary import summarize
+from isu_validate.search.effectiveness.summary import CLUSTERINGS, summarize
+from isu_validate.search.effectiveness.table import format_summary
 from isu_validate.search.effectiveness.suts import (BlindSpot, BenchmarkSUT, make_benchmark_sut,
                                                     random_blind_spots)
 from isu_validate.space import load_space, space_from_dict
@@ -117,6 +118,23 @@ def test_rates_ratio_and_effect_size_follow_the_definitions():
     assert summary.goal["threshold"] == 0.8 and summary.goal["baseline_rate"] == pytest.approx(100 / 12)
     assert summary.search_ms["rs"] == pytest.approx(10.0)
     assert set(summary.diversity) == {"better", "rs"} and summary.clusters >= 1
+
+
+def test_the_entropy_gap_is_checked_over_several_clusterings():
+    # identical failures: no clustering can tell the algorithms apart (a tie, exactly)
+    twins = [outcome(a, s, [0.5] * 12) for a in ("twin", "rs") for s in range(3)]
+    summary = summarize(SPACE, "made-up", "same failures", twins)
+    assert summary.entropy_gaps["twin"] == [0.0] * CLUSTERINGS
+    # every failure of "narrow" is one scene: lower entropy than rs's spread failures in every clustering
+    narrow = outcome("narrow", 0, [0.5] * 12)
+    one = narrow.records[0]
+    narrow.records = [Record(f"n{i}", 0, i, "narrow", 0, one.scene_key, one.scene, one.canonical, primary=0.5, failed=True)
+                      for i in range(12)]
+    rs = [outcome("rs", s, [0.5] * 12) for s in range(1, 3)]
+    summary = summarize(SPACE, "made-up", "narrow failures", [narrow] + rs)
+    gaps = summary.entropy_gaps["narrow"]
+    assert len(gaps) == CLUSTERINGS and max(gaps) < 0
+    assert "entropy over 5 clusterings" in format_summary(summary) and "not a finding" not in format_summary(summary)
 
 
 def test_no_failures_anywhere_leaves_rq2_empty_and_the_goal_explains_itself():

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from .summary import GOAL_A12, GOAL_RATIO, SutSummary
 
 
@@ -49,6 +51,9 @@ def format_summary(s: SutSummary) -> str:
         for t in s.diversity_tests:
             lines.append(f"    {t['algorithm']} vs {s.baseline} {t['measure']}: p {_num(t['p'], '.2g')}, "
                          f"A12 {_num(t['A12'], '.2f')}")
+        for algo, gaps in s.entropy_gaps.items():
+            lines.append(f"    {algo} - {s.baseline} entropy over {len(gaps)} clusterings (k-means seeds): mean "
+                         f"{_num(float(np.mean(gaps)), '+.3f')}, from {_num(min(gaps), '+.3f')} to {_num(max(gaps), '+.3f')}")
     if any(math.isfinite(v) for v in s.search_ms.values()):
         lines.append("  search CPU time per test (ask + diversity + tell, this thread): " +
                      ", ".join(f"{a} {_num(v, '.2f')} ms" for a, v in s.search_ms.items()))
@@ -65,7 +70,10 @@ def _goal_lines(s: SutSummary) -> list[str]:
     lines = [f"  goal at threshold {goal['threshold']:g} (the first where {s.baseline} finds < 10%: "
              f"{goal['baseline_rate']:.1f}%): ratio >= {GOAL_RATIO:g}, A12 >= {GOAL_A12}, entropy >= {s.baseline}'s"]
     for algo, g in goal["algorithms"].items():
+        gaps = s.entropy_gaps.get(algo, [])
+        unsure = " (the entropy gap's sign differs between clusterings: not a finding)" \
+            if gaps and min(gaps) < 0 < max(gaps) else ""
         lines.append(f"    {algo:>10}  ratio {_num(g['ratio'], '.2f')}, A12 {_num(g['A12'], '.2f')}, "
                      f"entropy {_num(g['entropy'], '.3f')} vs {_num(g['baseline_entropy'], '.3f')}: "
-                     f"{'met' if g['met'] else 'NOT met'}")
+                     f"{'met' if g['met'] else 'NOT met'}{unsure}")
     return lines
