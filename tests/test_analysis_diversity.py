@@ -4,7 +4,8 @@ import math
 import numpy as np
 import pytest
 
-from isu_validate.analysis.diversity import cluster_counts, cluster_failures, coverage, normalised_entropy
+from isu_validate.analysis.diversity import (CLUSTERINGS, cluster_counts, cluster_failures, coverage, entropy_gaps,
+                                             normalised_entropy)
 
 
 def test_entropy_hand_value_with_an_empty_cluster():
@@ -61,3 +62,18 @@ def test_zero_failures_and_bad_k():
     assert cluster_failures(np.zeros((0, 4)), k=3).k == 0
     with pytest.raises(ValueError, match="at least 1"):
         cluster_failures(np.ones((2, 2)), k=0)
+
+
+def test_entropy_gaps_over_several_clusterings():
+    rng = np.random.default_rng(0)
+    spread = rng.normal(size=(40, 4))
+    runs = [("b", r) for r in range(4) for _ in range(10)]
+    # the same failures for both algorithms: exactly no difference in any clustering
+    same = entropy_gaps(np.vstack([spread, spread]), [("a", r) for _, r in runs] + runs, k=5)
+    assert same == {("a", "b"): [0.0] * CLUSTERINGS}
+    # a's failures all one point, b's spread: lower in every clustering
+    narrow = np.vstack([np.repeat(spread[:1], 20, axis=0), spread])
+    gaps = entropy_gaps(narrow, [("a", r) for r in range(2) for _ in range(10)] + runs, k=5)[("a", "b")]
+    assert len(gaps) == CLUSTERINGS and max(gaps) < 0
+    assert entropy_gaps(np.zeros((0, 4)), [], k=5) == {}                        # no failures
+    assert entropy_gaps(spread, runs, k=5) == {}                                # one algorithm: no pair

@@ -11,7 +11,8 @@ from isu_validate.archive import TestRecord as Record  # (a Test* name would be 
 from isu_validate.cli import main
 from isu_validate.protocols import SUTRequest
 from isu_validate.search.effectiveness.harness import Outcome
-from isu_validate.search.effectiveness.summary import CLUSTERINGS, summarize
+from isu_validate.analysis.diversity import CLUSTERINGS
+from isu_validate.search.effectiveness.summary import summarize
 from isu_validate.search.effectiveness.table import format_summary
 from isu_validate.search.effectiveness.suts import (BlindSpot, BenchmarkSUT, make_benchmark_sut,
                                                     random_blind_spots)

@@ -135,7 +135,8 @@ def test_report_command_writes_html_and_every_table(runs_root, tmp_path, capsys)
     assert main(["report", str(runs_root), "--out", str(out), "--embedding", "scene", "--clusters", "500"]) == 0
     html = html_of(out / "report.html")
     expected = ["runs", "rq1", "statistics", "timeline", "feature_errors", "confusions", "feature_values", "regions",
-                "diversity", "diversity_runs", "diversity_statistics", "clusters", "failures", "sut_errors"]
+                "diversity", "diversity_runs", "diversity_statistics", "entropy_gaps", "clusters", "failures",
+                "sut_errors"]
     for name in expected:
         assert (out / f"{name}.csv").is_file(), name
     report = json.loads((out / "report.json").read_text())
@@ -161,6 +162,9 @@ def test_report_command_writes_html_and_every_table(runs_root, tmp_path, capsys)
     clusters = list(csv.DictReader(open(out / "clusters.csv")))
     assert {(c["run"], c["test_id"]) for c in clusters} == failing and len(clusters) == len(failing)
     assert "k lowered from 500" in html  # k larger than the number of failures
+    gaps = list(csv.DictReader(open(out / "entropy_gaps.csv")))  # nsga2 - rs over five k-means seeds
+    assert [(g["a"], g["b"], g["clusterings"]) for g in gaps] == [("nsga2", "rs", "5")]
+    assert float(gaps[0]["min"]) <= float(gaps[0]["mean"]) <= float(gaps[0]["max"]) and "Entropy difference" in html
     assert " · cluster " in html  # gallery cards name their RQ2 cluster
     assert html.count("<script>") == 1 and "data:image/png;base64," in html
 

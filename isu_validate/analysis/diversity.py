@@ -1,7 +1,11 @@
 """RQ2: how diverse are the failures?  Failing tests' embeddings are clustered with
 k-means; per algorithm, coverage is the share of clusters holding at least one of its
 failures and entropy the normalised Shannon entropy of its failures over all k clusters
-(Biagiola and Tonella): 1 when spread evenly, 0 when all fall in one cluster."""
+(Biagiola and Tonella): 1 when spread evenly, 0 when all fall in one cluster.
+
+k-means on such embeddings has many near-equal optima, so a difference in entropy between two
+algorithms is also measured over several clusterings (``entropy_gaps``): a gap whose sign
+changes with the k-means seed is not a finding."""
 from __future__ import annotations
 
 import math
@@ -62,3 +66,27 @@ def normalised_entropy(labels, k: int) -> float:
         return 0.0
     p = counts[counts > 0] / total
     return float(-(p * np.log(p)).sum() / math.log(k))
+
+
+CLUSTERINGS = 5   # k-means seeds an entropy gap is checked over (the first is the reported clustering)
+
+
+def entropy_gaps(embeddings: np.ndarray, runs: list[tuple[str, object]], k: int, seed: int = 0,
+                 clusterings: int = CLUSTERINGS) -> dict[tuple[str, str], list[float]]:
+    """For every pair (a, b) of algorithms, the mean per-run entropy of a's failures minus b's, in
+    each of ``clusterings`` k-means clusterings (seeds seed, seed + 1, ...). ``runs`` names the
+    (algorithm, run) of each embedded failure; runs without failures have no entropy and are left out."""
+    algorithms = sorted({a for a, _ in runs})
+    if not runs:
+        return {}
+    gaps: dict[tuple[str, str], list[float]] = {(a, b): [] for i, a in enumerate(algorithms) for b in algorithms[i + 1:]}
+    for n in range(clusterings):
+        clustering = cluster_failures(embeddings, k, seed + n)
+        by_run: dict[tuple[str, object], list[int]] = {}
+        for run, label in zip(runs, clustering.labels):
+            by_run.setdefault(run, []).append(int(label))
+        mean = {a: float(np.mean([normalised_entropy(labels, clustering.k) for run, labels in by_run.items()
+                                  if run[0] == a])) for a in algorithms}
+        for a, b in gaps:
+            gaps[(a, b)].append(mean[a] - mean[b])
+    return gaps

@@ -197,9 +197,17 @@ def diversity_part(runs: list[Run], embedder: Embedder, settings: ReportSettings
         html.append("<h3>Per-run coverage and entropy between algorithms</h3>")
         html.append(table(["measure", "a", "b", "runs_a", "runs_b", "U", "p", "method", "A12", "magnitude", "note"],
                           result.statistics))
+    if result.entropy_gaps:
+        html.append("<h3>Entropy difference between algorithms over several clusterings</h3>")
+        html.append(paragraph("Mean per-run entropy of a minus b, in k-means clusterings with seeds "
+                              f"{settings.seed} to {settings.seed + result.entropy_gaps[0]['clusterings'] - 1}: "
+                              "k-means on these embeddings has many near-equal optima, and a difference whose "
+                              "sign changes between them is not a finding."))
+        html.append(table(["a", "b", "clusterings", "mean", "min", "max", "sign stable"], result.entropy_gaps))
     return Part(section("RQ2: how diverse are the failures" + title, *html, anchor="rq2" + suffix),
                 {"diversity" + suffix: result.per_algorithm, "diversity_runs" + suffix: result.per_run,
-                 "diversity_statistics" + suffix: result.statistics, "clusters" + suffix: result.assignments()})
+                 "diversity_statistics" + suffix: result.statistics, "clusters" + suffix: result.assignments(),
+                 "entropy_gaps" + suffix: result.entropy_gaps})
 
 
 def _diversity_note(result: Diversity, embedder: Embedder, settings: ReportSettings) -> str:

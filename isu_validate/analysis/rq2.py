@@ -1,6 +1,7 @@
 """RQ2 over a set of runs of one SUT and mode: embed every failing test, cluster the
 embeddings, and measure per run and per algorithm the coverage and entropy of its
-failures over the clusters; compare algorithms on the per-run values."""
+failures over the clusters; compare algorithms on the per-run values, and the entropy
+difference also over several clusterings (k-means seeds, ``diversity.entropy_gaps``)."""
 from __future__ import annotations
 
 import itertools
@@ -10,7 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..archive import TestRecord
-from .diversity import Clustering, cluster_counts, cluster_failures, coverage, normalised_entropy
+from .diversity import Clustering, cluster_counts, cluster_failures, coverage, entropy_gaps, normalised_entropy
 from .embeddings import Embedder
 from .runs import Run
 
@@ -25,6 +26,7 @@ class Diversity:
     per_algorithm: list[dict] = field(default_factory=list)
     counts: dict[str, np.ndarray] = field(default_factory=dict)   # algorithm -> failures per cluster
     statistics: list[dict] = field(default_factory=list)
+    entropy_gaps: list[dict] = field(default_factory=list)       # per pair of algorithms, over several clusterings
 
     def assignments(self) -> list[dict]:
         return [{"run": r.name, "test_id": rec.test_id, "algorithm": r.algorithm, "cluster": int(c)}
@@ -43,6 +45,11 @@ def measure_diversity(runs: list[Run], embedder: Embedder, k: int, seed: int = 0
         result.counts[algo] = cluster_counts(labels, clustering.k)
         result.per_algorithm.append(_algorithm_row(algo, labels, clustering.k, result.per_run))
     result.statistics = compare(result.per_run, sorted(result.counts))
+    if len(result.counts) > 1:
+        gaps = entropy_gaps(vectors, [(run.algorithm, run.name) for run, _ in items], k, seed)
+        result.entropy_gaps = [{"a": a, "b": b, "clusterings": len(g), "mean": float(np.mean(g)),
+                                "min": min(g), "max": max(g), "sign stable": min(g) >= 0 or max(g) <= 0}
+                               for (a, b), g in gaps.items()]
     return result
 
 
