@@ -76,9 +76,9 @@ def entropy_gaps(embeddings: np.ndarray, runs: list[tuple[str, object]], k: int,
     """For every pair (a, b) of algorithms, the mean per-run entropy of a's failures minus b's, in
     each of ``clusterings`` k-means clusterings (seeds seed, seed + 1, ...). ``runs`` names the
     (algorithm, run) of each embedded failure; runs without failures have no entropy and are left out."""
-    algorithms = sorted({a for a, _ in runs})
     if not runs:
         return {}
+    algorithms = sorted({a for a, _ in runs})
     gaps: dict[tuple[str, str], list[float]] = {(a, b): [] for i, a in enumerate(algorithms) for b in algorithms[i + 1:]}
     for n in range(clusterings):
         clustering = cluster_failures(embeddings, k, seed + n)
