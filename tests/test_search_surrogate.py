@@ -199,7 +199,6 @@ def test_a_resumed_run_proposes_exactly_the_scenes_of_an_uninterrupted_one(tmp_p
     assert len(set(keys(tmp_path / "whole").values())) == 30
 
 
-
 def test_it_beats_its_first_version_on_two_feature_conjunctions_with_noise():
     """random-spots-1: six blind spots, each a conjunction of two feature values making one answer
     wrong, and 3% noise on every answer.  At threshold 0.8 (random search: about 5%), 5 seeds x 150

@@ -72,16 +72,18 @@ CLUSTERINGS = 5   # k-means seeds an entropy gap is checked over (the first is t
 
 
 def entropy_gaps(embeddings: np.ndarray, runs: list[tuple[str, object]], k: int, seed: int = 0,
-                 clusterings: int = CLUSTERINGS) -> dict[tuple[str, str], list[float]]:
+                 clusterings: int = CLUSTERINGS, first: Clustering | None = None) -> dict[tuple[str, str], list[float]]:
     """For every pair (a, b) of algorithms, the mean per-run entropy of a's failures minus b's, in
-    each of ``clusterings`` k-means clusterings (seeds seed, seed + 1, ...). ``runs`` names the
-    (algorithm, run) of each embedded failure; runs without failures have no entropy and are left out."""
+    each of ``clusterings`` k-means clusterings (seeds seed, seed + 1, ...; ``first``: the caller's
+    clustering at ``seed``, not computed again). ``runs`` names the (algorithm, run) of each embedded
+    failure; runs without failures have no entropy and are left out."""
     if not runs:
         return {}
     algorithms = sorted({a for a, _ in runs})
-    gaps: dict[tuple[str, str], list[float]] = {(a, b): [] for i, a in enumerate(algorithms) for b in algorithms[i + 1:]}
+    gaps: dict[tuple[str, str], list[float]] = {(a, b): [] for i, a in enumerate(algorithms)
+                                                for b in algorithms[i + 1:]}
     for n in range(clusterings):
-        clustering = cluster_failures(embeddings, k, seed + n)
+        clustering = first if n == 0 and first is not None else cluster_failures(embeddings, k, seed + n)
         by_run: dict[tuple[str, object], list[int]] = {}
         for run, label in zip(runs, clustering.labels):
             by_run.setdefault(run, []).append(int(label))

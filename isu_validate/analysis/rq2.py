@@ -46,7 +46,7 @@ def measure_diversity(runs: list[Run], embedder: Embedder, k: int, seed: int = 0
         result.per_algorithm.append(_algorithm_row(algo, labels, clustering.k, result.per_run))
     result.statistics = compare(result.per_run, sorted(result.counts))
     if len(result.counts) > 1:
-        gaps = entropy_gaps(vectors, [(run.algorithm, run.name) for run, _ in items], k, seed)
+        gaps = entropy_gaps(vectors, [(run.algorithm, run.name) for run, _ in items], k, seed, first=clustering)
         result.entropy_gaps = [{"a": a, "b": b, "clusterings": len(g), "mean": float(np.mean(g)),
                                 "min": min(g), "max": max(g), "sign stable": min(g) >= 0 or max(g) <= 0}
                                for (a, b), g in gaps.items()]

@@ -25,10 +25,11 @@ class Preset:
         return d
 
 
-# Measured on the 2-core machine with `isu-validate bench render` (table in render/README.md): per-pixel
-# path tracing dominates (1.6-1.8 CPU-seconds per sample at 640x480 with the people), OpenImageDenoise at
-# 640x480 ~1.2 CPU-s (its FAST quality drops standard's SSIM to 0.9695), so presets trade samples and resolution. OIDN with albedo/normal guides makes
-# 1-2 samples usable; extra bounces beyond 2 changed SSIM by < 0.001 here.
+# Measured on the 2-core machine with `isu-validate bench render` and in-process timings (render/README.md):
+# at 640x480 path tracing costs 1.25 CPU-s (0.62 s) a sample with the people, OpenImageDenoise HIGH 1.57
+# CPU-s (0.80 s; its FAST quality 0.83 CPU-s but standard's SSIM drops to 0.9695), so presets trade samples
+# and resolution. OIDN with albedo/normal guides makes 1-2 samples usable; extra bounces beyond 2 changed
+# SSIM by < 0.001 here.
 PRESETS = {
     "draft": Preset("draft", 0.5, 1, True, "FAST", 2, 1, 1, 3.0, 1.5),
     "standard": Preset("standard", 1.0, 2, True, "FAST", 2, 1, 1, 5.0, 1.5),

@@ -159,8 +159,6 @@ def _deltas_from(record: dict) -> dict:
     return {k[2:]: record[k] for k in record if k.startswith("d_")}
 
 
-
-
 def _dig(d: dict, dotted: str):
     for part in dotted.split("."):
         d = d.get(part, {}) if isinstance(d, dict) else {}

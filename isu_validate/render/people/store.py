@@ -2,9 +2,9 @@
 posed states (vertices in the cabin, hair, belt straps, the phone in the hand), as .npz files.
 
 An entry's key hashes everything that decides its content: the code that made it (PEOPLE_VERSION and
-the source of the modules that decide it, ``CONTENT_MODULES``, so a changed pose or region never comes back from an old cache), anny's
-version, the parts of the cabin rig the pose depends on, and the inputs (gender, classes, expression,
-phone position...). Entries are written to a temporary file and renamed into place, so
+the source of the modules that decide it, ``CONTENT_MODULES``, so a changed pose or region never comes
+back from an old cache), anny's version, the parts of the cabin rig the pose depends on, and the inputs
+(gender, classes, expression, phone position...). Entries are written to a temporary file and renamed into place, so
 the processes of a pool can share the folder. It lives beside anny's model cache (``ANNY_CACHE_DIR``,
 default ``<sys.prefix>/share/anny``) in ``isu-validate-people/``; ``ISU_PEOPLE_CACHE`` moves it."""
 from __future__ import annotations

@@ -69,5 +69,3 @@ def is_worse(name: str, value: float, than: float) -> bool:
     if name.endswith(("_resting", "_min")) or name.startswith("clear"):
         return value < than
     return abs(value) > abs(than)
-
-

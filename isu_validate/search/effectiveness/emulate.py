@@ -30,7 +30,7 @@ from ...evaluate.vqa import CORRECT, OCCLUDED, WRONG
 from ...space import SceneSpace
 from ...archive.run_file import ARCHIVE_FILE, RUN_FILE
 from ..surrogate import SceneEncoder
-from .suts import _other, scene_state
+from .suts import scene_state, wrong_answer
 
 MIN_LEAF_SHARE, MIN_LEAF = 0.01, 20   # a tree leaf holds at least this share of the tests (and this many)
 
@@ -77,7 +77,7 @@ class EmulatedSUT:
         answers = {}
         for q in questions:
             wrong = drawn.get(("wrong", q.key), False) and not drawn.get(("occluded", q.key), False)
-            answers[q.key] = _other(q.options, q.truth, rng.random()) if wrong else q.truth
+            answers[q.key] = wrong_answer(q.options, q.truth, rng.random()) if wrong else q.truth
         return answers
 
     def occluded(self, space: SceneSpace, canonical: Mapping[str, Any]) -> list[str]:

@@ -111,7 +111,7 @@ def _diversity(space, summary: SutSummary, by_algo: dict[str, list[Outcome]], k:
                                    for s, v in zip(("mean", "std"), mean_std(per_run[algo][m]))}
     if summary.baseline not in per_run:
         return
-    gaps = entropy_gaps(vectors, [(a, i) for a, i, _ in items], k, seed)
+    gaps = entropy_gaps(vectors, [(a, i) for a, i, _ in items], k, seed, first=clustering)
     for algo in summary.algorithms:
         if algo == summary.baseline:
             continue

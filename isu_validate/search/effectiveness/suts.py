@@ -58,11 +58,11 @@ class BenchmarkSUT:
             if hit and spot.when.matches(canonical):
                 for key, given in spot.answers.items():
                     if key in answers:
-                        answers[key] = _other(options[key], answers[key], pick) if given == ANY_WRONG else given
+                        answers[key] = wrong_answer(options[key], answers[key], pick) if given == ANY_WRONG else given
         for q in questions:  # random perception errors, independent per question
             draw, pick = rng.random(), rng.random()
             if draw < self.noise:
-                answers[q.key] = _other(options[q.key], answers[q.key], pick)
+                answers[q.key] = wrong_answer(options[q.key], answers[q.key], pick)
         return answers
 
     def occluded(self, space: SceneSpace, canonical: Mapping[str, Any]) -> list[str]:
@@ -78,7 +78,9 @@ def scene_state(name: str, seed: int, scene_key: str) -> int:
     return int.from_bytes(hashlib.sha1(f"{name}|{seed}|{scene_key}".encode()).digest()[:8], "little")
 
 
-def _other(options, answer: str, pick: float) -> str:
+def wrong_answer(options, answer: str, pick: float) -> str:
+    """One of the options other than ``answer``, picked by ``pick`` in [0, 1) (the answer itself when
+    there is no other)."""
     wrong = [o for o in options if o != answer]
     return wrong[int(pick * len(wrong))] if wrong else answer
 

@@ -53,7 +53,8 @@ def format_summary(s: SutSummary) -> str:
                          f"A12 {_num(t['A12'], '.2f')}")
         for algo, gaps in s.entropy_gaps.items():
             lines.append(f"    {algo} - {s.baseline} entropy over {len(gaps)} clusterings (k-means seeds): mean "
-                         f"{_num(float(np.mean(gaps)), '+.3f')}, from {_num(min(gaps), '+.3f')} to {_num(max(gaps), '+.3f')}")
+                         f"{_num(float(np.mean(gaps)), '+.3f')}, "
+                         f"from {_num(min(gaps), '+.3f')} to {_num(max(gaps), '+.3f')}")
     if any(math.isfinite(v) for v in s.search_ms.values()):
         lines.append("  search CPU time per test (ask + diversity + tell, this thread): " +
                      ", ".join(f"{a} {_num(v, '.2f')} ms" for a, v in s.search_ms.items()))
