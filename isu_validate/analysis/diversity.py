@@ -23,21 +23,25 @@ class Clustering:
     note: str = ""
 
 
-def cluster_failures(embeddings: np.ndarray, k: int, seed: int = 0) -> Clustering:
-    """k-means on L2-normalised embeddings (cosine geometry), k capped by the distinct points."""
+def cluster_failures(embeddings: np.ndarray, k: int, seed: int = 0, fit: np.ndarray | None = None) -> Clustering:
+    """k-means on L2-normalised embeddings (cosine geometry), k capped by the distinct points.
+    ``fit``: a mask of the embeddings the clusters are fitted on; the others (a reference that must
+    not move the clusters it is measured on) only get the label of their nearest centre."""
     if k < 1:
         raise ValueError(f"the number of clusters must be at least 1, got {k}")
     n = len(embeddings)
-    if n == 0:
-        return Clustering(np.zeros(0, dtype=int), k, 0, "no failures to cluster")
-    unit = _normalise(np.asarray(embeddings, dtype=float))
-    distinct = len(np.unique(np.round(unit, 9), axis=0))
+    unit = _normalise(np.asarray(embeddings, dtype=float)) if n else np.zeros((0, 0))
+    fitted = unit if fit is None else unit[np.asarray(fit, dtype=bool)]
+    if len(fitted) == 0:
+        return Clustering(np.zeros(n, dtype=int), k, 0, "no failures to cluster")
+    distinct = len(np.unique(np.round(fitted, 9), axis=0))
     used = min(k, distinct)
     note = f"k lowered from {k} to {used}: only {distinct} distinct failing embeddings" if used < k else ""
     if used == 1:
         return Clustering(np.zeros(n, dtype=int), k, 1, note)
-    model = KMeans(n_clusters=used, n_init=10, random_state=seed).fit(unit)
-    return Clustering(model.labels_.astype(int), k, used, note)
+    model = KMeans(n_clusters=used, n_init=10, random_state=seed).fit(fitted)
+    labels = model.labels_ if fit is None else model.predict(unit)
+    return Clustering(labels.astype(int), k, used, note)
 
 
 def _normalise(x: np.ndarray) -> np.ndarray:
@@ -72,18 +76,19 @@ CLUSTERINGS = 5   # k-means seeds an entropy gap is checked over (the first is t
 
 
 def entropy_gaps(embeddings: np.ndarray, runs: list[tuple[str, object]], k: int, seed: int = 0,
-                 clusterings: int = CLUSTERINGS, first: Clustering | None = None) -> dict[tuple[str, str], list[float]]:
+                 clusterings: int = CLUSTERINGS, first: Clustering | None = None,
+                 fit: np.ndarray | None = None) -> dict[tuple[str, str], list[float]]:
     """For every pair (a, b) of algorithms, the mean per-run entropy of a's failures minus b's, in
     each of ``clusterings`` k-means clusterings (seeds seed, seed + 1, ...; ``first``: the caller's
-    clustering at ``seed``, not computed again). ``runs`` names the (algorithm, run) of each embedded
-    failure; runs without failures have no entropy and are left out."""
+    clustering at ``seed``, not computed again; ``fit``: as ``cluster_failures``'s). ``runs`` names the
+    (algorithm, run) of each embedded failure; runs without failures have no entropy and are left out."""
     if not runs:
         return {}
     algorithms = sorted({a for a, _ in runs})
     gaps: dict[tuple[str, str], list[float]] = {(a, b): [] for i, a in enumerate(algorithms)
                                                 for b in algorithms[i + 1:]}
     for n in range(clusterings):
-        clustering = first if n == 0 and first is not None else cluster_failures(embeddings, k, seed + n)
+        clustering = first if n == 0 and first is not None else cluster_failures(embeddings, k, seed + n, fit)
         by_run: dict[tuple[str, object], list[int]] = {}
         for run, label in zip(runs, clustering.labels):
             by_run.setdefault(run, []).append(int(label))

@@ -5,17 +5,20 @@ at equal budgets over several seeds; prints per SUT the failure rate per thresho
 the ratio to the baseline, Wilcoxon p and A12, RQ2 coverage and entropy of the failure
 clusters, and the search's own time per test.  ``--pipeline`` does the same through
 the real pipeline (render + any ``--sut``), writing resumable run directories;
-``--emulate RUN_DIR...`` against an emulation of the SUT of stored runs (``emulate.py``).
+``--emulate RUN_DIR...`` against an emulation of the SUT of stored runs (``emulate.py``);
+``--bound ALPHA`` adds the known-risk bound (``bound.py``): what knowing the SUT would reach.
 """
 from __future__ import annotations
 
 import json
+import math
 import sys
 import time
 from pathlib import Path
 
 from ...space import load_space
 from ..algorithm_names import ALGORITHMS, algorithm_option, algorithms_option
+from .bound import KnownRiskSearch, risk_bank
 from .diagnosis import diagnose
 from .emulate import EmulatedSUT
 from .harness import simulate
@@ -42,6 +45,9 @@ def register_bench(sub) -> None:
     p.add_argument("--emulate", nargs="+", type=Path, metavar="RUN_DIR",
                    help="instead of the benchmark SUTs: an EMULATION of the SUT of these stored VQA runs "
                         "(per-feature errors and occlusion learnt from them), to tune the search without calling it")
+    p.add_argument("--bound", type=float, metavar="ALPHA",
+                   help="also the known-risk bound: tests drawn from random scenes with weight P(fail)^ALPHA, P known "
+                        "from other noise draws of the SUT (an upper reference, not a search; e.g. 2 or 4)")
     p.add_argument("--diagnose", action="store_true",
                    help="instead: why nsga2 barely beats rs (variants with one cause removed, per-generation trace)")
     p.add_argument("--pop-sizes", default="10,20,30", help="population sizes nsga2 is also tried with (--diagnose)")
@@ -68,6 +74,10 @@ def _check(args) -> list[str]:
         raise ValueError("--seeds and --budget must be at least 1 and --pop-size at least 2")
     if args.emulate and (args.pipeline or args.diagnose):
         raise ValueError("--emulate runs the in-memory benchmark; leave out --pipeline and --diagnose")
+    if args.bound is not None and (args.pipeline or args.diagnose):
+        raise ValueError("--bound runs in memory against a benchmark or emulated SUT; leave out --pipeline and --diagnose")
+    if args.bound is not None and not (math.isfinite(args.bound) and args.bound >= 0):
+        raise ValueError(f"--bound takes an exponent >= 0 (e.g. 2 or 4), got {args.bound:g}")
     if args.pipeline and args.out is None:
         raise ValueError("--pipeline writes run directories: give them a folder with --out (rerun it to resume)")
     return algorithms
@@ -94,6 +104,8 @@ def cmd_bench_effectiveness(args) -> int:
             outcomes = [simulate(space, sut, algo, seed, args.budget, args.pop_size)
                         for seed in seeds for algo in algorithms]
             summary = summarize(space, sut.name, sut.description, outcomes, args.baseline, args.clusters)
+            if args.bound is not None:
+                summary = _with_bound(space, sut, summary, outcomes, seeds, args)
             summaries.append(summary)
             print(format_summary(summary))
             print(f"  ({time.perf_counter() - start:.1f} s)\n", flush=True)
@@ -101,6 +113,19 @@ def cmd_bench_effectiveness(args) -> int:
         args.json.parent.mkdir(parents=True, exist_ok=True)
         args.json.write_text(json.dumps([s.to_dict() for s in summaries], indent=2, default=str))
     return 0
+
+
+def _with_bound(space, sut, summary, outcomes, seeds, args):
+    """The summary again with the bound's runs, its risk taken at the goal's threshold (else the strictest)."""
+    threshold = summary.goal.get("threshold", min(summary.thresholds))
+    bank = risk_bank(space, sut)
+    risk = bank.risk(threshold)
+    runs = [simulate(space, sut, KnownRiskSearch.name, seed, args.budget, args.pop_size,
+                     make=lambda sp, pop, sd: KnownRiskSearch(sp, pop, sd, bank, risk, args.bound)) for seed in seeds]
+    description = (f"{sut.description}; bound: P(fail at {threshold:g})^{args.bound:g} over {len(bank.scenes)} random "
+                   f"scenes, P from {len(bank.fitness)} other noise draws (mean {risk.mean():.3f}): a reference, not a search")
+    return summarize(space, sut.name, description, outcomes + runs, args.baseline, args.clusters,
+                     references=(KnownRiskSearch.name,))
 
 
 def _pipeline(args, space, algorithms, seeds):

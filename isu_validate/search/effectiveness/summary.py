@@ -59,7 +59,9 @@ def failure_rates(outcome: Outcome, thresholds: list[float]) -> list[float]:
 
 
 def summarize(space: SceneSpace, sut: str, description: str, outcomes: list[Outcome], baseline: str = "rs",
-              k: int = 10, seed: int = 0) -> SutSummary:
+              k: int = 10, seed: int = 0, references: tuple[str, ...] = ()) -> SutSummary:
+    """``references``: algorithms measured on the failure clusters of the others without joining their
+    k-means fit (the known-risk bound), so adding one leaves every other figure as it was."""
     algorithms = list(dict.fromkeys(o.algorithm for o in outcomes))
     thresholds = list(thresholds_for("vqa"))
     by_algo = {a: [o for o in outcomes if o.algorithm == a] for a in algorithms}
@@ -70,7 +72,7 @@ def summarize(space: SceneSpace, sut: str, description: str, outcomes: list[Outc
     summary.search_ms = {a: _search_ms(r) for a, r in by_algo.items()}
     if baseline in by_algo:
         summary.comparisons = _compare(summary)
-    _diversity(space, summary, by_algo, k, seed)
+    _diversity(space, summary, by_algo, k, seed, references)
     summary.goal = _goal(summary)
     return summary
 
@@ -97,13 +99,15 @@ def _compare(summary: SutSummary) -> list[dict]:
     return rows
 
 
-def _diversity(space, summary: SutSummary, by_algo: dict[str, list[Outcome]], k: int, seed: int) -> None:
+def _diversity(space, summary: SutSummary, by_algo: dict[str, list[Outcome]], k: int, seed: int,
+               references: tuple[str, ...]) -> None:
     items = [(a, i, scene) for a, runs in by_algo.items() for i, o in enumerate(runs) for scene in o.failing_scenes()]
     if not items:
         return
     vectors = make_embedder("scene").embed_scenes(space, [scene for _, _, scene in items])
     runs = {a: len(r) for a, r in by_algo.items()}
-    clustering = cluster_failures(vectors, k, seed)
+    fit = np.array([a not in references for a, _, _ in items]) if references else None
+    clustering = cluster_failures(vectors, k, seed, fit)
     per_run = _per_run(items, clustering, runs)
     summary.clusters = clustering.k
     for algo in by_algo:
@@ -111,7 +115,7 @@ def _diversity(space, summary: SutSummary, by_algo: dict[str, list[Outcome]], k:
                                    for s, v in zip(("mean", "std"), mean_std(per_run[algo][m]))}
     if summary.baseline not in per_run:
         return
-    gaps = entropy_gaps(vectors, [(a, i) for a, i, _ in items], k, seed, first=clustering)
+    gaps = entropy_gaps(vectors, [(a, i) for a, i, _ in items], k, seed, first=clustering, fit=fit)
     for algo in summary.algorithms:
         if algo == summary.baseline:
             continue
