@@ -35,6 +35,7 @@ SETTINGS = {
     "algorithm": ("run", "algorithm"), "pop_size": ("run", "pop_size"), "seed": ("run", "seed"),
     "budget": ("run", "budget_tests"), "budget_time": ("run", "budget_s"), "workers": ("run", "workers"),
     "cluster": ("run", "cluster"), "stop_after_sut_errors": ("run", "stop_after_sut_errors"),
+    "learn_from": ("run", "learn_from"),
 }
 EPILOG = f"""API keys come from the environment only, never from a flag or a file, and are never
 written to run.json, the archive, logs or reports:
@@ -77,6 +78,9 @@ def add_run_options(p) -> None:
     p.add_argument("--algorithm", type=algorithm_option, metavar="|".join(ALGORITHMS), help=f"search algorithm (default {r.algorithm}): surrogate (surrogate-assisted, learns "
                         "where the SUT errs), nsga2 (the paper's NSGA-II, for replication), rs (random search, the baseline)")
     p.add_argument("--pop-size", type=int, help=f"population size (default {r.pop_size})")
+    p.add_argument("--learn-from", nargs="+", metavar="RUN",
+                   help="earlier runs of the same SUT, mode and space the surrogate learns from before its first "
+                        "generation (their tests are not run again and do not count in the budget)")
     p.add_argument("--budget", type=int, help=f"number of tests (default {DEFAULT_BUDGET}; with --resume: extend the budget)")
     p.add_argument("--budget-time", type=float, help="wall-clock budget in seconds (instead of, or with, --budget)")
     p.add_argument("--seed", type=int, help=f"random seed of the search (default {r.seed})")
@@ -128,6 +132,8 @@ def given_settings(args) -> dict[str, dict]:
             value = parse_options(value)
         elif dest == "min_visible":
             value = parse_min_visible(value)
+        elif dest == "learn_from":
+            value = tuple(str(Path(p).resolve()) for p in value)
         out[part][field] = value
     return out
 
@@ -155,6 +161,7 @@ def _mismatch_message(exc: ResumeMismatch) -> str:
     """The differences in the words the user typed (--seed, not seed)."""
     flags = {(f"pipeline.{field}" if part == "pipeline" else field): "--" + dest.replace("_", "-")
              for dest, (part, field) in SETTINGS.items()}
+    flags["learned_from"] = "the tests of the --learn-from runs"   # those runs changed since
     listed = "\n".join(f"  {_flag(d.setting, flags)}: {_shown(d.stored)} in the stored run, "
                        f"{_shown(d.now)} now" for d in exc.differences)
     return (f"{exc.run_dir} holds a run started with other settings:\n{listed}\n"

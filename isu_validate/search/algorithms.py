@@ -48,6 +48,11 @@ class SearchAlgorithm:
     def ask(self, n_max: int) -> list[dict]:
         raise NotImplementedError
 
+    def learn(self, records: list) -> None:
+        """Tests of earlier runs of the same SUT, before the first ``ask`` (``run --learn-from``)."""
+        raise ValueError(f"the {self.name or 'chosen'} search does not learn from earlier runs (--learn-from); "
+                         "use --algorithm surrogate")
+
     def tell(self, F: np.ndarray, records: list | None = None) -> None:
         """Objectives of the scenes last asked (rows in their order); ``records`` are their
         archive records (answers, per-feature verdicts) for algorithms that learn from them."""

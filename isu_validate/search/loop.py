@@ -28,6 +28,7 @@ from ..space import load_space
 from .algorithms import make_algorithm
 from .diversity import DiversityTracker
 from .error_streak import DEFAULT_LIMIT, SUTErrorsStop, SUTErrorStreak
+from .prior_runs import read_prior_tests
 
 __all__ = ["ARCHIVE_FILE", "RUN_FILE", "RunConfig", "RunError", "RunSummary", "SUTErrorsStop", "run_search"]
 # The fitness the search sees for a test without a verdict (SUT or render error): the
@@ -48,6 +49,7 @@ class RunConfig:
     workers: int = 1
     cluster: str | None = None
     stop_after_sut_errors: int = DEFAULT_LIMIT  # SUT errors in a row with no answer between; 0 = never stop
+    learn_from: tuple[str, ...] = ()            # earlier runs of the same SUT the search learns from first
 
     def check(self) -> None:
         """The plain values; the components are checked by building them (``make_executor``)."""
@@ -67,6 +69,8 @@ class RunConfig:
             data.pop(volatile)
         data["pipeline"].pop("run_dir")
         data["pipeline"].pop("render_threads")  # how the work is spread, not what it computes
+        if not data["learn_from"]:
+            data.pop("learn_from")  # runs started before --learn-from existed resume unchanged
         return json.loads(json.dumps(data))  # as stored in run.json (tuples become lists)
 
 
@@ -101,12 +105,15 @@ def run_search(config: RunConfig, resume: bool = False, progress_stream=None) ->
     check_render_settings(config.pipeline, space)   # an unregistered camera, a bad --min-visible
     run_dir = Path(config.pipeline.run_dir)
     algorithm = make_algorithm(config.algorithm, space, config.pop_size, config.seed)
-    new = check_run_dir(run_dir, config.identity(), space.hash,
+    identity = config.identity()
+    if config.learn_from:
+        identity["learned_from"] = _learn(algorithm, config, space)
+    new = check_run_dir(run_dir, identity, space.hash,
                         {"budget_tests": config.budget_tests, "budget_s": config.budget_s}, resume)
     executor = make_executor(config.pipeline, config.workers, config.cluster)  # builds (checks) every component
     try:
         if new:
-            write_run_file(run_dir, _run_file_content(config, space))
+            write_run_file(run_dir, _run_file_content(config, identity, space))
         summary, streak = _search(config, space, run_dir, algorithm, executor, progress_stream)
     finally:
         executor.close()
@@ -115,8 +122,18 @@ def run_search(config: RunConfig, resume: bool = False, progress_stream=None) ->
     return summary
 
 
-def _run_file_content(config: RunConfig, space) -> dict:
-    return {"identity": config.identity(), "config": asdict(config), "space_hash": space.hash,
+def _learn(algorithm, config: RunConfig, space) -> str:
+    """Hand the earlier runs' tests to the search; the digest of what it learnt from."""
+    prior = read_prior_tests(config.learn_from, config.pipeline, space, config.pipeline.run_dir)
+    try:
+        algorithm.learn(prior.records)
+    except ValueError as exc:
+        raise RunError(str(exc)) from None
+    return f"{len(prior.records)} tests, {prior.digest}"
+
+
+def _run_file_content(config: RunConfig, identity: dict, space) -> dict:
+    return {"identity": identity, "config": asdict(config), "space_hash": space.hash,
             "space_source": space.source, "space": space.to_dict(), "versions": _versions(),
             "started": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
 

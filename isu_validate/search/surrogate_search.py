@@ -165,12 +165,22 @@ class SurrogateSearch(SearchAlgorithm):
             targets = [record_targets(r) for r in records]
         else:  # objectives only: learn the fitness itself
             targets = [{"fitness": float(np.clip(1.0 - f, 0.0, 1.0))} for f in np.asarray(F, dtype=float)[:, 0]]
+        self._remember(scenes, np.asarray(F, dtype=float)[:, 0], targets)
+
+    def learn(self, records: list) -> None:
+        """Tests of earlier runs of the same SUT (``run --learn-from``): learnt from and never
+        proposed again, as if this run had made them before its first generation."""
+        self.seen.update(self.space.key(r.scene) for r in records)
+        self._remember([r.scene for r in records], np.array([r.primary for r in records], dtype=float),
+                       [record_targets(r) for r in records])
+
+    def _remember(self, scenes: list[dict], fitness: np.ndarray, targets: list) -> None:
+        """Scenes with their f_qa and per-feature targets (None: no verdict) into the model and archive."""
         kept = [s for s, t in zip(scenes, targets) if t is not None]
         canonical = [self.space.canonical(s) for s in kept]
         self.model.observe(canonical, [t for t in targets if t is not None])
         self.tested += kept
         failing = [max(t.values()) > 0 for t in targets if t is not None]  # any answer wrong
-        fitness = np.asarray(F, dtype=float)[:, 0]
         self._fitness = np.concatenate([self._fitness, [f for f, t in zip(fitness, targets) if t is not None]])
         self._failing = np.concatenate([self._failing, np.array(failing, dtype=bool)])
         if kept:

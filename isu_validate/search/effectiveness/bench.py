@@ -6,7 +6,9 @@ the ratio to the baseline, Wilcoxon p and A12, RQ2 coverage and entropy of the f
 clusters, and the search's own time per test.  ``--pipeline`` does the same through
 the real pipeline (render + any ``--sut``), writing resumable run directories;
 ``--emulate RUN_DIR...`` against an emulation of the SUT of stored runs (``emulate.py``);
-``--bound ALPHA`` adds the known-risk bound (``bound.py``): what knowing the SUT would reach.
+``--bound ALPHA`` adds the known-risk bound (``bound.py``): what knowing the SUT would reach;
+``--prior-tests N`` lets the surrogate first learn from N earlier random tests of the SUT, as
+``run --learn-from`` does.
 """
 from __future__ import annotations
 
@@ -18,6 +20,7 @@ from pathlib import Path
 
 from ...space import load_space
 from ..algorithm_names import ALGORITHMS, algorithm_option, algorithms_option
+from ..surrogate_search import SurrogateSearch
 from .bound import KnownRiskSearch, risk_bank
 from .diagnosis import diagnose
 from .emulate import EmulatedSUT
@@ -48,6 +51,9 @@ def register_bench(sub) -> None:
     p.add_argument("--bound", type=float, metavar="ALPHA",
                    help="also the known-risk bound: tests drawn from random scenes with weight P(fail)^ALPHA, P known "
                         "from other noise draws of the SUT (an upper reference, not a search; e.g. 2 or 4)")
+    p.add_argument("--prior-tests", type=int, default=0, metavar="N",
+                   help="the surrogate first learns from N earlier random tests of the same SUT (other seeds; not "
+                        "in its budget), as `run --learn-from` does")
     p.add_argument("--diagnose", action="store_true",
                    help="instead: why nsga2 barely beats rs (variants with one cause removed, per-generation trace)")
     p.add_argument("--pop-sizes", default="10,20,30", help="population sizes nsga2 is also tried with (--diagnose)")
@@ -78,6 +84,9 @@ def _check(args) -> list[str]:
         raise ValueError("--bound runs in memory against a benchmark or emulated SUT; leave out --pipeline and --diagnose")
     if args.bound is not None and not (math.isfinite(args.bound) and args.bound >= 0):
         raise ValueError(f"--bound takes an exponent >= 0 (e.g. 2 or 4), got {args.bound:g}")
+    if args.prior_tests and (args.pipeline or args.diagnose or args.prior_tests < 0):
+        raise ValueError("--prior-tests takes a number of tests >= 0 and runs in memory; leave out --pipeline "
+                         "and --diagnose (through the pipeline, use `run --learn-from`)")
     if args.pipeline and args.out is None:
         raise ValueError("--pipeline writes run directories: give them a folder with --out (rerun it to resume)")
     return algorithms
@@ -101,9 +110,11 @@ def cmd_bench_effectiveness(args) -> int:
             [make_benchmark_sut(name, space) for name in _names(args.suts)]
         for sut in suts:
             start = time.perf_counter()
-            outcomes = [simulate(space, sut, algo, seed, args.budget, args.pop_size)
+            outcomes = [simulate(space, sut, algo, seed, args.budget, args.pop_size, make=_learner(algo, sut, args))
                         for seed in seeds for algo in algorithms]
-            summary = summarize(space, sut.name, sut.description, outcomes, args.baseline, args.clusters)
+            description = sut.description + (f"; the surrogate learnt first from {args.prior_tests} earlier random "
+                                             "tests per run (not in its budget)" if args.prior_tests else "")
+            summary = summarize(space, sut.name, description, outcomes, args.baseline, args.clusters)
             if args.bound is not None:
                 summary = _with_bound(space, sut, summary, outcomes, seeds, args)
             summaries.append(summary)
@@ -115,6 +126,21 @@ def cmd_bench_effectiveness(args) -> int:
     return 0
 
 
+PRIOR_SEED_OFFSET = 1000   # the earlier tests' random-search seeds: apart from every run's own
+
+
+def _learner(algo: str, sut, args):
+    """For --prior-tests: a surrogate that first learns from earlier random tests; else None."""
+    if algo != SurrogateSearch.name or not args.prior_tests:
+        return None
+
+    def make(space, pop_size, seed):
+        search = SurrogateSearch(space, pop_size, seed)
+        search.learn(simulate(space, sut, "rs", PRIOR_SEED_OFFSET + seed, args.prior_tests, pop_size).records)
+        return search
+    return make
+
+
 def _with_bound(space, sut, summary, outcomes, seeds, args):
     """The summary again with the bound's runs, its risk taken at the goal's threshold (else the strictest)."""
     threshold = summary.goal.get("threshold", min(summary.thresholds))
@@ -122,7 +148,7 @@ def _with_bound(space, sut, summary, outcomes, seeds, args):
     risk = bank.risk(threshold)
     runs = [simulate(space, sut, KnownRiskSearch.name, seed, args.budget, args.pop_size,
                      make=lambda sp, pop, sd: KnownRiskSearch(sp, pop, sd, bank, risk, args.bound)) for seed in seeds]
-    description = (f"{sut.description}; bound: P(fail at {threshold:g})^{args.bound:g} over {len(bank.scenes)} random "
+    description = (f"{summary.description}; bound: P(fail at {threshold:g})^{args.bound:g} over {len(bank.scenes)} random "
                    f"scenes, P from {len(bank.fitness)} other noise draws (mean {risk.mean():.3f}): a reference, not a search")
     return summarize(space, sut.name, description, outcomes + runs, args.baseline, args.clusters,
                      references=(KnownRiskSearch.name,))
