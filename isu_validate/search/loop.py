@@ -113,7 +113,7 @@ def run_search(config: RunConfig, resume: bool = False, progress_stream=None) ->
     executor = make_executor(config.pipeline, config.workers, config.cluster)  # builds (checks) every component
     try:
         if new:
-            write_run_file(run_dir, _run_file_content(config, identity, space))
+            write_run_file(run_dir, _run_file_content(config, space, identity))
         summary, streak = _search(config, space, run_dir, algorithm, executor, progress_stream)
     finally:
         executor.close()
@@ -132,8 +132,8 @@ def _learn(algorithm, config: RunConfig, space) -> str:
     return f"{len(prior.records)} tests, {prior.digest}"
 
 
-def _run_file_content(config: RunConfig, identity: dict, space) -> dict:
-    return {"identity": identity, "config": asdict(config), "space_hash": space.hash,
+def _run_file_content(config: RunConfig, space, identity: dict | None = None) -> dict:
+    return {"identity": identity or config.identity(), "config": asdict(config), "space_hash": space.hash,
             "space_source": space.source, "space": space.to_dict(), "versions": _versions(),
             "started": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
 
