@@ -158,7 +158,7 @@ def test_a_run_asks_in_its_prompt_style_and_resumes_in_it(tmp_path):
         config = config_from_args(parser.parse_args(["--sut", "command:true"] + argv))
         parts = build_components(config.pipeline, space)   # the real renderer (not started), SUT and judge
         assert parts.build_request(space, SCENE, "x.png", "vqa", None).prompt.startswith(opening)
-        write_run_file(config.pipeline.run_dir, _run_file_content(config, space))   # run.json, as a run writes it
+        write_run_file(config.pipeline.run_dir, _run_file_content(config, space, config.identity()))   # run.json, as a run writes it
     # resuming takes the style from run.json; another one is refused by name
     resumed = config_from_args(parser.parse_args(["--out", str(tmp_path / "b"), "--resume"]))
     assert resumed.pipeline.prompt_style == "compact"

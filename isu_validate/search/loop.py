@@ -132,8 +132,8 @@ def _learn(algorithm, config: RunConfig, space) -> str:
     return f"{len(prior.records)} tests, {prior.digest}"
 
 
-def _run_file_content(config: RunConfig, space, identity: dict | None = None) -> dict:
-    return {"identity": identity or config.identity(), "config": asdict(config), "space_hash": space.hash,
+def _run_file_content(config: RunConfig, space, identity: dict) -> dict:
+    return {"identity": identity, "config": asdict(config), "space_hash": space.hash,
             "space_source": space.source, "space": space.to_dict(), "versions": _versions(),
             "started": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
 
