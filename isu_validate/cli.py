@@ -1,42 +1,61 @@
-"""The ``isu-validate`` command: one entry point, one module per subcommand in ``commands/``."""
+"""The ``isu-validate`` command: one entry point, one module per subcommand in ``commands/``.
+
+Starting must be quick (``--version``, ``--help`` and a mistyped option answer in well under a second),
+so only the module of the command being run is imported; the others appear in ``--help`` through the
+one-line summaries below. A command imports its heavy libraries when it runs.
+"""
 from __future__ import annotations
 
 import argparse
 import importlib
 import sys
+import traceback
 
-# Each module in isu_validate/commands/ defines `register(subparsers)`, which adds its
-# subcommand(s) and sets `func` (called with the parsed args, returns an exit code).
-COMMAND_MODULES = [
-    "run",        # run, export (search + crash-safe archive)
-    "bench",      # bench search|render|...
-    "render",     # render one scene or N random ones (Blender)
-    "people",     # people warm|check (the anny bodies of the renders)
-    "report",     # report RUN...: RQ1/RQ2 analysis, statistics, HTML
-    "sut",        # sut check
-    "reference",  # reference train (the embedded reference ISU)
-    "realism",    # realism A B: FID/KID
-    "stylize",    # stylize (gatys|fast), stylize train
-    "capture",    # capture list|shoot (V4L2, DepthAI, replay)
-    "calibrate",  # calibrate IMAGES..., calibrate diff|register
-    "recreate",   # recreate RUN...: pairs and printable recreation sheets for a lab
-    "agree",      # agree PAIRS: sim/real agreement report; agree votes: validity votes
-    "exposure",   # exposure fit|apply|chart|colour|check (the camera's imaging model)
-]
+from .commands import chosen
+from .errors import UserError
+
+# command -> (module in isu_validate/commands/ that registers it, its one-line summary in --help).
+# Each module defines `register(subparsers)`, which adds its subcommand(s) and sets `func` (called with
+# the parsed args, returns an exit code); a test checks that these summaries are the modules' own.
+COMMANDS = {
+    "run": ("run", "search the scene space for scenes the SUT gets wrong"),
+    "export": ("run", "write a run's tests table"),
+    "bench": ("bench", "benchmarks: speed against error"),
+    "render": ("render", "render scenes with Blender (one scene file, or --random N)"),
+    "people": ("people", "the anny people of the renders: warm their cache, check their poses"),
+    "report": ("report", "compare runs: failure rates, statistics, failure analysis and diversity"),
+    "sut": ("sut", "systems under test: check that one answers"),
+    "reference": ("reference", "the embedded reference ISU (train it)"),
+    "realism": ("realism", "FID/KID between image sets (renders, stylised renders, real photos)"),
+    "stylize": ("stylize", "neural style transfer of renders towards a real photo (or: stylize train)"),
+    "capture": ("capture", "camera capture: list devices, shoot frames with exposure metadata"),
+    "calibrate": ("calibrate", "calibrate a camera from ChArUco images (also: diff, register)"),
+    "recreate": ("recreate", "pick tests to recreate in a real car; write pairs and recreation sheets"),
+    "agree": ("agree", "per-feature sim/real agreement report (or: agree votes, validity votes)"),
+    "exposure": ("exposure", "camera exposure, response, noise and colour: fit, apply, check"),
+}
+
+__all__ = ["COMMANDS", "UserError", "build_parser", "main"]
 
 
-class UserError(Exception):
-    """A problem the user can fix; printed without a traceback."""
-
-
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
+    """The parser; with ``argv``, only the command it names is built in full (the others are summaries).
+    Without ``argv`` every command is built, as the docs' tests walk them all."""
     parser = argparse.ArgumentParser(
         prog="isu-validate",
         description="Search-based testing of VLM in-car scene understanding, validated against the real world.")
     parser.add_argument("--version", action="version", version=_version())
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for name in COMMAND_MODULES:
-        importlib.import_module(f"isu_validate.commands.{name}").register(sub)
+    wanted = chosen(argv, COMMANDS) if argv is not None else None
+    registered = set()
+    for name, (module, summary) in COMMANDS.items():
+        if argv is None or name == wanted or COMMANDS.get(wanted, ("",))[0] == module:
+            if module not in registered:
+                registered.add(module)
+                register = importlib.import_module(f"isu_validate.commands.{module}").register
+                register(sub, argv) if module == "bench" else register(sub)   # bench builds only the one run
+        else:
+            sub.add_parser(name, help=summary, add_help=False)
     return parser
 
 
@@ -49,7 +68,8 @@ def _version() -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(argv)
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
         parser.print_help()
@@ -60,11 +80,17 @@ def main(argv: list[str] | None = None) -> int:
         sys.stderr.close()
         return 0
     except KeyboardInterrupt:
-        print("interrupted; everything evaluated so far is saved (resume with --resume)", file=sys.stderr)
+        print(getattr(args, "interrupted", "interrupted; everything evaluated so far is saved "
+                                           "(resume with --resume)"), file=sys.stderr)
         return 130
-    except (UserError, FileNotFoundError, ValueError) as exc:  # SpaceError, PairsError are ValueErrors
+    except UserError as exc:
         print(f"isu-validate {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except Exception:
+        traceback.print_exc()
+        print(f"isu-validate {args.command}: internal error (a bug in isu-validate, not in your input): please "
+              "report it with the traceback above and the command you ran", file=sys.stderr)
+        return 70   # EX_SOFTWARE
 
 
 if __name__ == "__main__":

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import atexit
 import multiprocessing
+import os
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Iterable, Iterator
 
@@ -116,3 +117,8 @@ def make_executor(config: PipelineConfig, workers: int = 1, cluster: str | None 
     if workers < 1:
         raise ValueError(f"--workers must be at least 1, got {workers}")
     return InProcessExecutor(config) if workers == 1 else LocalPoolExecutor(config, workers)
+
+
+def render_threads(workers: int) -> int:
+    """Split the cores between parallel renderers (0 = Blender takes all, for one worker)."""
+    return 0 if workers <= 1 else max(1, (os.cpu_count() or 1) // workers)

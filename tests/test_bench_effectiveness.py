@@ -10,11 +10,11 @@ import pytest
 from isu_validate.archive import TestRecord as Record  # (a Test* name would be collected by pytest)
 from isu_validate.cli import main
 from isu_validate.protocols import SUTRequest
-from isu_validate.search.effectiveness.harness import Outcome
+from isu_validate.bench.effectiveness.harness import Outcome
 from isu_validate.analysis.diversity import CLUSTERINGS
-from isu_validate.search.effectiveness.summary import summarize
-from isu_validate.search.effectiveness.table import format_summary
-from isu_validate.search.effectiveness.suts import (BlindSpot, BenchmarkSUT, make_benchmark_sut,
+from isu_validate.bench.effectiveness.summary import summarize
+from isu_validate.bench.effectiveness.table import format_summary
+from isu_validate.sut.planted import (BlindSpot, BenchmarkSUT, make_benchmark_sut,
                                                     random_blind_spots)
 from isu_validate.space import load_space, space_from_dict
 from isu_validate.space.conditions import parse_condition

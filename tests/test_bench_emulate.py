@@ -6,9 +6,9 @@ import pytest
 
 from isu_validate.archive import Archive
 from isu_validate.cli import main
-from isu_validate.search.effectiveness.emulate import EmulatedSUT
-from isu_validate.search.effectiveness.harness import InstantEvaluation, simulate
-from isu_validate.search.effectiveness.suts import BlindSpot, BenchmarkSUT
+from isu_validate.bench.effectiveness.emulate import EmulatedSUT
+from isu_validate.bench.effectiveness.harness import InstantEvaluation, simulate
+from isu_validate.sut.planted import BlindSpot, BenchmarkSUT
 from isu_validate.space import load_space
 from isu_validate.space.conditions import parse_condition
 

@@ -5,11 +5,11 @@ import pytest
 
 from isu_validate.analysis.diversity import cluster_failures
 from isu_validate.cli import main
-from isu_validate.search.effectiveness import bench
-from isu_validate.search.effectiveness.bound import KnownRiskSearch, RiskBank, risk_bank
-from isu_validate.search.effectiveness.harness import simulate
-from isu_validate.search.effectiveness.summary import summarize
-from isu_validate.search.effectiveness.suts import BenchmarkSUT, BlindSpot
+from isu_validate.bench.effectiveness import command as bench
+from isu_validate.bench.effectiveness.bound import KnownRiskSearch, RiskBank, risk_bank
+from isu_validate.bench.effectiveness.harness import simulate
+from isu_validate.bench.effectiveness.summary import summarize
+from isu_validate.sut.planted import BenchmarkSUT, BlindSpot
 from isu_validate.space import load_space
 from isu_validate.space.conditions import parse_condition
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from capture.camera_model import frames, synthetic
-from capture.camera_model.bench import response_error
+from isu_validate.bench.exposure import response_error
 from capture.camera_model.fit import fit_camera, plot_predictions
 from capture.camera_model.model import ImagingModel
 from capture.camera_model.response_fit import UnderdeterminedError

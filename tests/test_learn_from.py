@@ -5,8 +5,8 @@ import shutil
 
 import numpy as np
 
-from isu_validate.search.effectiveness.harness import InstantEvaluation, simulate
-from isu_validate.search.effectiveness.suts import BenchmarkSUT, BlindSpot
+from isu_validate.bench.effectiveness.harness import InstantEvaluation, simulate
+from isu_validate.sut.planted import BenchmarkSUT, BlindSpot
 from isu_validate.search.surrogate_search import SurrogateSearch
 from isu_validate.space import load_space
 from isu_validate.space.conditions import parse_condition

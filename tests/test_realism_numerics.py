@@ -159,7 +159,7 @@ def test_compare_reports_every_setting_and_small_n_warning():
 
 
 def test_bench_tables_report_agreement_below_the_goal(capsys):
-    from isu_validate.realism.bench import agreement_table, spread_table, synthetic_pools
+    from isu_validate.bench.fid import agreement_table, spread_table, synthetic_pools
     a, b = synthetic_pools(60, dim=64, rank=8)
     agreement_table(a, b, [2, 53])
     spread_table(a, b, [2, 10], repeats=3, seed=0)

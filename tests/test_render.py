@@ -314,7 +314,7 @@ def test_bench_render_reports_speed_and_error_per_preset(tmp_path, capsys):
     import argparse
     import json
 
-    from isu_validate.render.bench import register_bench
+    from isu_validate.bench.render import register_bench
     parser = argparse.ArgumentParser()
     register_bench(parser.add_subparsers())
     # a command SUT that answers from the image's brightness: some answers may flip with the preset

@@ -156,7 +156,7 @@ def test_bench_search_judges_the_goal_on_the_search_overhead_not_the_whole_loop(
     """The goal (< 5 ms a test) is what the search adds: search + durable commit. The whole loop also
     holds the benchmark SUT's answers and judging, a stand-in for a render and a SUT call."""
     from isu_validate.cli import main
-    from isu_validate.search import bench
+    from isu_validate.bench import search as bench
 
     rows = [{"size": 100, "tests": 100, "ms_per_test": 7.0, "search_ms_per_test": 3.0,
              "commit_ms_per_test": 1.5, "cpu_ms_per_test": 4.0},

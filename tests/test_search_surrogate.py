@@ -5,8 +5,8 @@ import pytest
 from isu_validate.archive import TestRecord as Record  # (a Test* name would be collected by pytest)
 from isu_validate.search import make_algorithm
 from isu_validate.search.breeding import Breeder
-from isu_validate.search.effectiveness.harness import simulate
-from isu_validate.search.effectiveness.suts import BlindSpot, BenchmarkSUT, make_benchmark_sut
+from isu_validate.bench.effectiveness.harness import simulate
+from isu_validate.sut.planted import BlindSpot, BenchmarkSUT, make_benchmark_sut
 from isu_validate.search.surrogate import ErrorModel, SceneEncoder, record_targets
 from isu_validate.search.surrogate_search import SurrogateSearch
 from isu_validate.space import load_space, space_from_dict

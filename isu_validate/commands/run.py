@@ -8,12 +8,12 @@ The defaults themselves live in ``RunConfig`` and ``PipelineConfig``.
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 from dataclasses import fields
 from pathlib import Path
 
 from ..archive.run_file import RUN_FILE, ResumeMismatch, read_run_file
+from ..execution import render_threads
 from ..pipeline import PipelineConfig
 from ..sut.prompt import PROMPT_STYLES
 from ..render.visibility import DEFAULT_MIN_VISIBLE, parse_min_visible
@@ -187,11 +187,6 @@ def _known(cls, values: dict) -> dict:
     """Only the fields this version knows (a run.json may come from an older or newer one)."""
     names = {f.name for f in fields(cls)}
     return {k: v for k, v in values.items() if k in names}
-
-
-def render_threads(workers: int) -> int:
-    """Split the cores between parallel renderers (0 = Blender takes all, for one worker)."""
-    return 0 if workers <= 1 else max(1, (os.cpu_count() or 1) // workers)
 
 
 def cmd_run(args) -> int:

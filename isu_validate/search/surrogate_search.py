@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .algorithms import SearchAlgorithm
+from .base import SearchAlgorithm
 from .breeding import Breeder
 from .surrogate import ErrorModel, record_targets
 

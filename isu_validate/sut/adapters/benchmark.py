@@ -1,4 +1,4 @@
-"""``bench:NAME``: a benchmark SUT with known blind spots (``isu_validate.search.effectiveness.suts``).
+"""``bench:NAME``: a benchmark SUT with known blind spots (``isu_validate.sut.planted``).
 
 It answers from the scene, not the image: inside a run directory the scene of
 ``images/<test>.png`` is in ``labels/<test>.json``, written before the image is rendered.
@@ -21,7 +21,7 @@ from .common import fingerprint, take_options
 
 class BenchmarkAdapter:
     def __init__(self, target: str, *, timeout_s: float = 60.0, space=None, **options: Any):
-        from ...search.effectiveness.suts import make_benchmark_sut
+        from ..planted import make_benchmark_sut
 
         take_options(options, {}, f"SUT bench:{target}")
         try:

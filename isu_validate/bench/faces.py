@@ -15,7 +15,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from .labels import INSTANCE_ID
+from isu_validate.render.labels import INSTANCE_ID
 
 CHANGED = 12   # luma levels: a visible change
 
@@ -31,8 +31,8 @@ def register_bench(sub) -> None:
 
 
 def run(args) -> int:
-    from ..space import load_space
-    from . import open_renderer
+    from isu_validate.space import load_space
+    from isu_validate.render import open_renderer
 
     space = load_space()
     rng = np.random.default_rng(args.seed)

@@ -21,7 +21,7 @@ def register_bench(sub) -> None:
 
 def _captions(space, scenes) -> list[str]:
     """Plausible SUT captions: the reference, reworded and partly wrong, so metrics do real work."""
-    from .reference_caption import reference_caption
+    from isu_validate.evaluate.reference_caption import reference_caption
 
     swaps = {"female": "male", "white": "black", "happy": "serious", "The image shows": "I can see"}
     out = []
@@ -34,13 +34,13 @@ def _captions(space, scenes) -> list[str]:
 
 
 def cmd_bench_evaluate(args) -> int:
-    from ..space import load_space
-    from ..sut import build_request
-    from ..sut.parse import parse_vqa
-    from . import models, similarity, text_metrics
-    from .reference_caption import reference_caption
-    from .vqa import VQAJudge
-    from ..protocols import SUTResponse
+    from isu_validate.space import load_space
+    from isu_validate.sut import build_request
+    from isu_validate.sut.parse import parse_vqa
+    from isu_validate.evaluate import models, similarity, text_metrics
+    from isu_validate.evaluate.reference_caption import reference_caption
+    from isu_validate.evaluate.vqa import VQAJudge
+    from isu_validate.protocols import SUTResponse
 
     space = load_space(args.space)
     scenes = space.sample(np.random.default_rng(args.seed), args.scenes)

@@ -15,13 +15,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ...archive import TestRecord
-from ...evaluate.vqa import VQAJudge
-from ...protocols import SUTRequest, SUTResponse, Verdict
-from ...space import SceneSpace
-from ..algorithms import make_algorithm
-from ..diversity import DiversityTracker
-from ..loop import _objectives
+from isu_validate.archive import TestRecord
+from isu_validate.evaluate.vqa import VQAJudge
+from isu_validate.protocols import SUTRequest, SUTResponse, Verdict
+from isu_validate.space import SceneSpace
+from isu_validate.search.algorithms import make_algorithm
+from isu_validate.search.diversity import DiversityTracker
+from isu_validate.search.loop import _objectives
 
 
 @dataclass

@@ -6,10 +6,10 @@ import time
 
 import numpy as np
 
-from . import synthetic
-from .board import BoardSpec
-from .calibrate import calibrate
-from .projection_diff import projection_diff
+from capture import synthetic
+from capture.board import BoardSpec
+from capture.calibrate import calibrate
+from capture.projection_diff import projection_diff
 
 # A larger board than the usual print, close and well tilted: the data a careful
 # technician collects.  mrcal's reference run on synthetic data (40 frames, 0.3 px noise) used comparable coverage.

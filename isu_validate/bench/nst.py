@@ -72,10 +72,10 @@ def _images(args, folder: Path) -> tuple[Path, Path]:
 
 def gatys_table(content_path: Path, style_path: Path, size: int, steps: list[int], optimizer: str) -> None:
     import torch  # imported here: registering the bench must not load torch
-    from .gatys import GatysConfig, stylize_gatys
-    from .imageio import load_image
-    from .preservation import luminance, ssim_luma
-    from .vgg import VGG19
+    from style_transfer.gatys import GatysConfig, stylize_gatys
+    from style_transfer.imageio import load_image
+    from style_transfer.preservation import luminance, ssim_luma
+    from style_transfer.vgg import VGG19
     vgg = VGG19("avg")
     content, style = load_image(content_path, size), load_image(style_path, size)
     luma_in = luminance(content[0].permute(1, 2, 0).numpy().astype(np.float64))
@@ -89,9 +89,9 @@ def gatys_table(content_path: Path, style_path: Path, size: int, steps: list[int
 
 def fast_table(model: Path | None, frames: int, folder: Path) -> None:
     import torch  # imported here: registering the bench must not load torch
-    from .fast import load_model, stylize_fast
-    from .fast_net import FastStyleNet
-    from .imageio import load_image, save_image
+    from style_transfer.fast import load_model, stylize_fast
+    from style_transfer.fast_net import FastStyleNet
+    from style_transfer.imageio import load_image, save_image
     net = load_model(model)[0] if model else FastStyleNet().eval()
     render, _ = synthetic_pair()
     render.save(folder / "frame.png")
@@ -115,7 +115,7 @@ def fast_table(model: Path | None, frames: int, folder: Path) -> None:
 
 
 def train_table(content: Path, style: Path, steps: int, folder: Path) -> None:
-    from .fast import FastTrainConfig, train_fast
+    from style_transfer.fast import FastTrainConfig, train_fast
     report = train_fast(style, [content], folder / "m.pt", FastTrainConfig(steps=steps), resume=False)
     print(f"\nfast-model training: {steps} steps (batch 2, crop 128) in {report.seconds:.1f} s "
           f"({report.seconds / steps:.2f} s/step); loss {report.losses[0]:.4g} -> {report.losses[-1]:.4g}")
@@ -125,8 +125,8 @@ def gap_table(n: int, train_steps: int, folder: Path, style_weight: float = 1.0)
     """Does style transfer narrow the sim-to-real gap? Renders and photos show different scenes,
     as in a real study; one photo is the style. Small images keep it to minutes on a CPU."""
     from isu_validate.realism import FeatureExtractor, MetricSettings, compare_features
-    from .fast import FastTrainConfig, load_model, stylize_fast, train_fast
-    from .imageio import load_image, save_image
+    from style_transfer.fast import FastTrainConfig, load_model, stylize_fast, train_fast
+    from style_transfer.imageio import load_image, save_image
     sets = {name: folder / name for name in ("sim", "real", "nst")}
     for d in sets.values():
         d.mkdir()

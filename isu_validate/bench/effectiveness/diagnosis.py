@@ -18,12 +18,12 @@ from pymoo.operators.mutation.pm import PM
 from pymoo.operators.mutation.rm import ChoiceRandomMutation
 from pymoo.operators.repair.rounding import RoundingRepair
 
-from ...space import SceneSpace
-from ..algorithms import NSGA2Search, make_algorithm
-from .harness import simulate
-from ...analysis.thresholds import thresholds_for
-from .summary import BASELINE_RATE, failure_rates
-from .suts import BenchmarkSUT
+from isu_validate.space import SceneSpace
+from isu_validate.search.algorithms import NSGA2Search, make_algorithm
+from isu_validate.bench.effectiveness.harness import simulate
+from isu_validate.analysis.thresholds import thresholds_for
+from isu_validate.bench.effectiveness.summary import BASELINE_RATE, failure_rates
+from isu_validate.sut.planted import BenchmarkSUT
 
 
 class _NoDiversity(NSGA2Search):

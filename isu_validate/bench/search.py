@@ -14,14 +14,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ..archive import Archive, TestRecord
-from ..space import load_space
-from .algorithm_names import ALGORITHMS, algorithms_option
-from .algorithms import make_algorithm
-from .diversity import DiversityTracker
-from .loop import _objectives
-from .effectiveness.harness import InstantEvaluation
-from .effectiveness.suts import make_benchmark_sut
+from isu_validate.archive import Archive, TestRecord
+from isu_validate.space import load_space
+from isu_validate.search.algorithm_names import ALGORITHMS, algorithms_option
+from isu_validate.search.algorithms import make_algorithm
+from isu_validate.search.diversity import DiversityTracker
+from isu_validate.search.loop import _objectives
+from isu_validate.bench.effectiveness.harness import InstantEvaluation
+from isu_validate.sut.planted import make_benchmark_sut
 
 WINDOW = 200  # tests per timing window
 

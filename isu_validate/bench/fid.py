@@ -41,7 +41,7 @@ def synthetic_pools(n: int, dim: int = 2048, rank: int = 64, seed: int = 0) -> t
 
 
 def agreement_table(pool_a: np.ndarray, pool_b: np.ndarray, sizes: list[int]) -> None:
-    from .fid import GramFID, fid_from_stats, stats
+    from isu_validate.realism.fid import GramFID, fid_from_stats, stats
     print("1. trace route against the float64 eigenvalue reference (same features)")
     print(f"{'n':>6} {'FID (fast)':>14} {'FID (eig ref)':>14} {'rel diff':>10} {'fast s':>8} {'ref s':>8}  sqrtm (pytorch-fid)")
     for i, n in enumerate(sizes):
@@ -59,7 +59,7 @@ def agreement_table(pool_a: np.ndarray, pool_b: np.ndarray, sizes: list[int]) ->
 def _sqrtm_route(a: np.ndarray, b: np.ndarray) -> str:
     import scipy.linalg
 
-    from .fid import stats
+    from isu_validate.realism.fid import stats
     (ma, sa), (mb, sb) = stats(a), stats(b)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -72,8 +72,8 @@ def _sqrtm_route(a: np.ndarray, b: np.ndarray) -> str:
 
 
 def spread_table(pool_a: np.ndarray, pool_b: np.ndarray, sizes: list[int], repeats: int, seed: int) -> None:
-    from .fid import fid
-    from .kid import kid
+    from isu_validate.realism.fid import fid
+    from isu_validate.realism.kid import kid
     full_fid = fid(pool_a, pool_b)
     full_kid = kid(pool_a, pool_b, subset_size=min(1000, len(pool_a), len(pool_b)), subsets=20, seed=seed).mean
     print(f"\n2. n against spread ({repeats} random subsets per n; pools of {len(pool_a)} and {len(pool_b)}: "
@@ -93,8 +93,8 @@ def spread_table(pool_a: np.ndarray, pool_b: np.ndarray, sizes: list[int], repea
 
 
 def throughput_table(count: int, batch_size: int, seed: int) -> None:
-    from .features import FeatureExtractor
-    from .resize import resize_rgb
+    from isu_validate.realism.features import FeatureExtractor
+    from isu_validate.realism.resize import resize_rgb
     rng = np.random.default_rng(seed)
     frames = [rng.uniform(0, 255, (480, 640, 3)).astype(np.float32) for _ in range(count)]
     ex = FeatureExtractor(batch_size=batch_size)
@@ -120,9 +120,9 @@ def _pools(args):
     if not args.a:
         big = max(_sizes(args)) * 2
         return synthetic_pools(max(big, 1000), seed=args.seed), "synthetic low-rank Gaussian features, d=2048"
-    from .cache import default_cache_dir
-    from .features import FeatureExtractor, stderr_progress
-    from .sets import resolve_set
+    from isu_validate.realism.cache import default_cache_dir
+    from isu_validate.realism.features import FeatureExtractor, stderr_progress
+    from isu_validate.realism.sets import resolve_set
     if not args.b:
         raise ValueError("bench fid needs both --a and --b (or neither, for synthetic features)")
     ex = FeatureExtractor(batch_size=args.batch_size, cache=default_cache_dir())

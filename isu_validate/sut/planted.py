@@ -19,8 +19,8 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from ...space import SceneSpace
-from ...space.conditions import Condition, Term, parse_condition
+from isu_validate.space import SceneSpace
+from isu_validate.space.conditions import Condition, Term, parse_condition
 
 
 ANY_WRONG = "*"

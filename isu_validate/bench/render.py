@@ -37,8 +37,8 @@ def register_bench(sub) -> None:
 
 
 def run(args) -> int:
-    from ..space import load_space
-    from . import get_preset
+    from isu_validate.space import load_space
+    from isu_validate.render import get_preset
 
     space = load_space()
     scenes = space.sample(np.random.default_rng(args.seed), args.scenes)
@@ -67,7 +67,7 @@ def run(args) -> int:
 def _references(scenes, reference, args, space) -> list[np.ndarray]:
     """Reference frames, reused from ``--out`` when rendered before with the same rigs, renderer
     version and reference settings (the file name carries the render cache key)."""
-    from . import open_renderer
+    from isu_validate.render import open_renderer
     with open_renderer(reference, args.rig, log_dir=args.out / "logs", timeout_s=3600) as r:
         paths = [args.out / f"reference-{r.cache_key(space.canonical(s))[:16]}.png" for s in scenes]
         todo = [(s, p) for s, p in zip(scenes, paths) if not p.is_file()]
@@ -84,7 +84,7 @@ def _references(scenes, reference, args, space) -> list[np.ndarray]:
 def _bench_preset(preset, scenes, refs, args, space, people: bool = True) -> dict:
     from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
-    from . import open_renderer
+    from isu_validate.render import open_renderer
     times, psnr, ssim = [], [], []
     parts = {"people_s": [], "update_s": [], "render_s": [], "write_s": [], "worker_cpu_s": [], "footprint_s": []}
     with open_renderer(preset, args.rig, log_dir=args.out / "logs") as r:
@@ -117,7 +117,7 @@ class _SUTCheck:
     """Share of VQA answers a SUT gives on a preset's frames that equal its answers on the references."""
 
     def __init__(self, spec: str, space, scenes, ref_paths):
-        from ..sut import build_request, open_sut
+        from isu_validate.sut import build_request, open_sut
         self.sut, self.space, self.scenes, self.build = open_sut(spec, space=space), space, scenes, build_request
         self.ref = [self._answers(s, p) for s, p in zip(scenes, ref_paths)]
 

@@ -25,12 +25,12 @@ import numpy as np
 from sklearn.multioutput import ClassifierChain
 from sklearn.tree import DecisionTreeClassifier
 
-from ...archive import read_records
-from ...evaluate.vqa import CORRECT, OCCLUDED, WRONG
-from ...space import SceneSpace
-from ...archive.run_file import ARCHIVE_FILE, RUN_FILE
-from ..surrogate import SceneEncoder
-from .suts import scene_state, wrong_answer
+from isu_validate.archive import read_records
+from isu_validate.evaluate.vqa import CORRECT, OCCLUDED, WRONG
+from isu_validate.space import SceneSpace
+from isu_validate.archive.run_file import ARCHIVE_FILE, RUN_FILE
+from isu_validate.search.surrogate import SceneEncoder
+from isu_validate.sut.planted import scene_state, wrong_answer
 
 MIN_LEAF_SHARE, MIN_LEAF = 0.01, 20   # a tree leaf holds at least this share of the tests (and this many)
 

@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 
-from .summary import GOAL_A12, GOAL_RATIO, SutSummary
+from isu_validate.bench.effectiveness.summary import GOAL_A12, GOAL_RATIO, SutSummary
 
 
 def _num(value: float, fmt: str) -> str:

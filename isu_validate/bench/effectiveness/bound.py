@@ -16,10 +16,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...analysis.thresholds import fails_at
-from ...space import SceneSpace
-from ..algorithms import SearchAlgorithm
-from .harness import InstantEvaluation
+from isu_validate.analysis.thresholds import fails_at
+from isu_validate.space import SceneSpace
+from isu_validate.search.base import SearchAlgorithm
+from isu_validate.bench.effectiveness.harness import InstantEvaluation
 
 BANK_SCENES = 2000          # random scenes the bound picks from
 RISK_SEEDS = 8              # noise seeds of the SUT its failure probability is estimated over

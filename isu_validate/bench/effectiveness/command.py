@@ -18,17 +18,17 @@ import sys
 import time
 from pathlib import Path
 
-from ...space import load_space
-from ..algorithm_names import ALGORITHMS, algorithm_option, algorithms_option
-from ..surrogate_search import SurrogateSearch
-from .bound import KnownRiskSearch, risk_bank
-from .diagnosis import diagnose
-from .emulate import EmulatedSUT
-from .harness import simulate
-from .pipeline_runs import PipelineSettings, run_all
-from .summary import summarize
-from .suts import BENCHMARK_SUTS, make_benchmark_sut
-from .table import format_summary
+from isu_validate.space import load_space
+from isu_validate.search.algorithm_names import ALGORITHMS, algorithm_option, algorithms_option
+from isu_validate.search.surrogate_search import SurrogateSearch
+from isu_validate.bench.effectiveness.bound import KnownRiskSearch, risk_bank
+from isu_validate.bench.effectiveness.diagnosis import diagnose
+from isu_validate.bench.effectiveness.emulate import EmulatedSUT
+from isu_validate.bench.effectiveness.harness import simulate
+from isu_validate.bench.effectiveness.pipeline_runs import PipelineSettings, run_all
+from isu_validate.bench.effectiveness.summary import summarize
+from isu_validate.sut.planted import BENCHMARK_SUTS, make_benchmark_sut
+from isu_validate.bench.effectiveness.table import format_summary
 
 
 def register_bench(sub) -> None:
@@ -155,7 +155,7 @@ def _with_bound(space, sut, summary, outcomes, seeds, args):
 
 
 def _pipeline(args, space, algorithms, seeds):
-    from ...commands.run import render_threads
+    from isu_validate.execution import render_threads
 
     settings = PipelineSettings(out=args.out, sut=args.sut, space=args.space, algorithms=algorithms, seeds=seeds,
                                 budget=args.budget, pop_size=args.pop_size, preset=args.preset, camera=args.camera,

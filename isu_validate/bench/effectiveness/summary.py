@@ -18,13 +18,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...analysis.diversity import cluster_failures, coverage, entropy_gaps, normalised_entropy
-from ...analysis.embeddings import make_embedder
-from ...analysis.rq2 import mean_std
-from ...analysis.stats import rank_sum_test, vargha_delaney
-from ...analysis.thresholds import fails_at, thresholds_for
-from ...space import SceneSpace
-from .harness import Outcome
+from isu_validate.analysis.diversity import cluster_failures, coverage, entropy_gaps, normalised_entropy
+from isu_validate.analysis.embeddings import make_embedder
+from isu_validate.analysis.rq2 import mean_std
+from isu_validate.analysis.stats import rank_sum_test, vargha_delaney
+from isu_validate.analysis.thresholds import fails_at, thresholds_for
+from isu_validate.space import SceneSpace
+from isu_validate.bench.effectiveness.harness import Outcome
 
 GOAL_RATIO, GOAL_A12, BASELINE_RATE = 3.0, 0.71, 10.0  # the goal, baseline rate in %
 

@@ -14,11 +14,11 @@ from pathlib import Path
 
 import numpy as np
 
-from . import chart, synthetic
-from .apply import apply
-from .colour_fit import fit_colour, srgb_decode, srgb_encode
-from .fit import fit_camera
-from .model import AutoExposure, ColourCorrection, Noise
+from capture.camera_model import chart, synthetic
+from capture.camera_model.apply import apply
+from capture.camera_model.colour_fit import fit_colour, srgb_decode, srgb_encode
+from capture.camera_model.fit import fit_camera
+from capture.camera_model.model import AutoExposure, ColourCorrection, Noise
 
 GOAL = {"target_rel": 0.02, "response_full_scale": 0.01, "de2000_after": 2.0, "apply_ms": 50.0}
 

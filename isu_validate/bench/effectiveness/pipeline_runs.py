@@ -14,10 +14,10 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from ...archive import read_records
-from ...pipeline import PipelineConfig
-from ..loop import ARCHIVE_FILE, RUN_FILE, RunConfig, RunError, run_search
-from .harness import Outcome
+from isu_validate.archive import read_records
+from isu_validate.pipeline import PipelineConfig
+from isu_validate.search.loop import ARCHIVE_FILE, RUN_FILE, RunConfig, RunError, run_search
+from isu_validate.bench.effectiveness.harness import Outcome
 
 
 @dataclass
