@@ -29,6 +29,7 @@ demo: $(STAMP)
 		--preset draft --out $(DEMO_DIR)
 
 test: $(STAMP)
+	$(VENV)/bin/ruff check .
 	$(PY) -m pytest -q -p no:cacheprovider
 
 clean-venv:

@@ -21,13 +21,15 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from isu_validate.errors import UserError
+
 ECC_WIDTH = 320          # ECC runs at this width (and the shift is scaled back): fast and less noise-driven
 FLAT_GRADIENT = 24.0     # Sobel magnitude (0..255 images) below which a frame has no edges: a 6-level step
 MIN_ECC = 0.5            # below this correlation a registration is a guess, not a measurement
 GOOD_SHARE, CHECK_SHARE = 0.012, 0.035   # of the image diagonal: 9 px and 28 px at 640x480
 
 
-class AlignmentError(ValueError):
+class AlignmentError(UserError, ValueError):
     """An image the aid cannot read; the message names the file."""
 
 
@@ -89,17 +91,6 @@ def align(render: np.ndarray, frame: np.ndarray) -> tuple[Alignment, np.ndarray]
               "off": "move the camera (or the scene) until the edges overlap"}[verdict]
     result = Alignment(distance, shift, ecc, verdict, "; ".join([advice] + notes), (w, h))
     return result, _aid_image(render, frame, edges_r, result)
-
-
-def align_files(render_path: str | Path, frame_path: str | Path, out: str | Path | None = None) -> Alignment:
-    """Align two image files; write the aid image to ``out`` when given."""
-    result, image = align(read_bgr(render_path), read_bgr(frame_path))
-    if out is not None:
-        out = Path(out)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        if not cv2.imwrite(str(out), image):
-            raise OSError(f"could not write the alignment image {out}")
-    return result
 
 
 # ---------------------------------------------------------------------- measures

@@ -11,6 +11,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from isu_validate.errors import InputError
+
 SPEC_HELP = "charuco:COLSxROWS:SQUARE_M:MARKER_M:DICT, e.g. charuco:11x8:0.030:0.022:DICT_5X5_100"
 
 
@@ -26,7 +28,7 @@ class BoardSpec:
     def parse(cls, spec: str) -> "BoardSpec":
         m = re.fullmatch(r"charuco:(\d+)x(\d+):([0-9.eE+-]+):([0-9.eE+-]+):(DICT_\w+)", spec.strip())
         if not m:
-            raise ValueError(f"cannot read board spec {spec!r}; expected {SPEC_HELP}")
+            raise InputError(f"cannot read board spec {spec!r}; expected {SPEC_HELP}")
         cols, rows, square, marker, dictionary = int(m[1]), int(m[2]), float(m[3]), float(m[4]), m[5]
         spec_obj = cls(cols, rows, square, marker, dictionary)
         spec_obj.validate()
@@ -34,16 +36,17 @@ class BoardSpec:
 
     def validate(self) -> None:
         if self.cols < 2 or self.rows < 2:
-            raise ValueError(f"a ChArUco board needs at least 2x2 squares, got {self.cols}x{self.rows}")
+            raise InputError(f"a ChArUco board needs at least 2x2 squares, got {self.cols}x{self.rows}")
         if not 0 < self.marker_m < self.square_m:
-            raise ValueError(f"marker size {self.marker_m} m must be positive and smaller than the square {self.square_m} m")
+            raise InputError(f"marker size {self.marker_m} m must be positive and smaller than the square "
+                             f"{self.square_m} m")
         if not hasattr(cv2.aruco, self.dictionary):
-            raise ValueError(f"unknown ArUco dictionary {self.dictionary!r}; use an OpenCV name such as DICT_5X5_100")
+            raise InputError(f"unknown ArUco dictionary {self.dictionary!r}; use an OpenCV name such as DICT_5X5_100")
         n_markers = (self.cols * self.rows) // 2
         size = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, self.dictionary)).bytesList.shape[0]
         if n_markers > size:
-            raise ValueError(f"a {self.cols}x{self.rows} board needs {n_markers} markers but {self.dictionary} has {size}; "
-                             "use a larger dictionary")
+            raise InputError(f"a {self.cols}x{self.rows} board needs {n_markers} markers but {self.dictionary} "
+                             f"has {size}; use a larger dictionary")
 
     def __str__(self) -> str:
         return f"charuco:{self.cols}x{self.rows}:{self.square_m:g}:{self.marker_m:g}:{self.dictionary}"
@@ -77,7 +80,7 @@ class Detection:
 def detect(spec: BoardSpec, image: np.ndarray, source: str = "") -> Detection:
     """Corners of ``spec`` in a grey or BGR image (possibly none)."""
     if image is None or image.size == 0:
-        raise ValueError(f"{source or 'image'}: empty image")
+        raise InputError(f"{source or 'image'}: empty image")
     gray = image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
     if gray.dtype != np.uint8:
         gray = cv2.normalize(gray, None, 0, 255, cv2.NORM_MINMAX).astype(np.uint8)

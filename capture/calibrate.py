@@ -10,9 +10,11 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from isu_validate.errors import InputError, InputNotFound
+
 from . import checks, uncertainty
 from .board import BoardSpec, Detection, detect
-from .camera_file import CameraModel
+from .camera import Camera
 from .projection_diff import DiffMap, projection_diff
 from .solve import MIN_CORNERS_PER_FRAME, CalibrationError, Solution, solve
 
@@ -21,7 +23,7 @@ MIN_FRAMES_PER_HALF = 3
 
 @dataclass
 class CalibrationResult:
-    camera: CameraModel
+    camera: Camera
     solution: Solution
     uncertainty_map: uncertainty.UncertaintyMap
     crossval: DiffMap | None
@@ -44,7 +46,7 @@ def detect_images(paths, spec: BoardSpec, progress=None) -> tuple[list[Detection
         img = cv2.imread(p, cv2.IMREAD_GRAYSCALE)
         if img is None:
             if not Path(p).exists():
-                raise FileNotFoundError(f"image {p} does not exist")
+                raise InputNotFound(f"image {p} does not exist")
             skipped.append((p, "not a readable image"))
             continue
         sizes[(img.shape[1], img.shape[0])].append(p)
@@ -62,7 +64,7 @@ def detect_images(paths, spec: BoardSpec, progress=None) -> tuple[list[Detection
 def check_one_size(sizes: dict) -> None:
     if len(sizes) > 1:
         listing = "; ".join(f"{w}x{h}: {len(ps)} image(s), e.g. {ps[0]}" for (w, h), ps in sizes.items())
-        raise ValueError(f"the images have different sizes ({listing}); calibrate each resolution separately "
+        raise InputError(f"the images have different sizes ({listing}); calibrate each resolution separately "
                          "(a camera model describes one sensor mode)")
 
 
@@ -111,7 +113,7 @@ def _cross_validate(sol: Solution, outlier_sigma: float, distance_m: float):
     return projection_diff(a.model, a.intrinsics, b.model, b.intrinsics, sol.image_size, distance_m=distance_m), (a, b)
 
 
-def _camera(name, sol, usum, cv_stats, warnings, board, skipped, distance, outlier_sigma) -> CameraModel:
+def _camera(name, sol, usum, cv_stats, warnings, board, skipped, distance, outlier_sigma) -> Camera:
     from importlib.metadata import PackageNotFoundError, version
     try:
         tool = f"isu-validate {version('isu-validate')}"
@@ -138,5 +140,5 @@ def _camera(name, sol, usum, cv_stats, warnings, board, skipped, distance, outli
         "date": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
         "tool": tool,
     }
-    return CameraModel(name, sol.model, sol.image_size[0], sol.image_size[1], sol.intrinsics.copy(),
-                       quality=quality, calibration=calibration)
+    return Camera(name, sol.model, sol.image_size[0], sol.image_size[1], sol.intrinsics,
+                  quality=quality, calibration=calibration)

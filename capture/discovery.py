@@ -13,7 +13,8 @@ LUXONIS_VENDOR_ID = 0x03E7
 # why each look may come back empty: reported (text and JSON alike) when no camera at all was found
 NOT_FOUND = {
     "v4l2": "no /dev/video* devices (is a USB camera plugged in? in a container, pass --device /dev/videoN)",
-    "depthai": "no DepthAI devices (USB3 cable; udev rule for vendor 03e7; in a container -v /dev/bus/usb:/dev/bus/usb)",
+    "depthai": ("no DepthAI devices (USB3 cable; udev rule for vendor 03e7; in a container "
+                "-v /dev/bus/usb:/dev/bus/usb)"),
     "usb": "no USB devices with Luxonis vendor id 03e7",
 }
 

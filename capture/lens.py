@@ -7,20 +7,22 @@ opencv8) or ``cv2.fisheye.projectPoints`` (fisheye) and gives the same pixels:
 - ``pinhole``: no distortion.
 - ``opencv8``: k1 k2 p1 p2 k3 k4 k5 k6 (OpenCV's rational model).
 - ``fisheye``: k1..k4 of ``cv2.fisheye`` (equidistant: theta_d = theta (1 + k1 theta^2 + ...)).
+
+A camera file may give an ``opencv8`` lens any distortion length OpenCV takes (``OPENCV_LENGTHS``:
+shorter vectors mean the rest are zero); this module is the one place that calls OpenCV's projection.
+The models' names and distortion lengths (``MODELS``, ``N_DISTORTION``) live in ``lens_models``, which
+loads no OpenCV; they are re-exported here.
 """
 from __future__ import annotations
 
 import cv2
 import numpy as np
 
-N_DISTORTION = {"pinhole": 0, "opencv8": 8, "fisheye": 4}
-MODELS = tuple(N_DISTORTION)
+from isu_validate.errors import InputError
 
+from .lens_models import MODELS, N_DISTORTION, check_model  # noqa: F401  (re-exported as lens.*)
 
-def check_model(model: str) -> str:
-    if model not in N_DISTORTION:
-        raise ValueError(f"unknown lens model {model!r}; use one of {', '.join(MODELS)}")
-    return model
+OPENCV_LENGTHS = (0, 4, 5, 8, 12, 14)   # distortion vectors cv2.projectPoints takes (k1 k2 p1 p2 [k3 [k4 k5 k6 ...]])
 
 
 def n_intrinsics(model: str) -> int:
@@ -30,6 +32,29 @@ def n_intrinsics(model: str) -> int:
 def camera_matrix(intrinsics) -> np.ndarray:
     fx, fy, cx, cy = intrinsics[:4]
     return np.array([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]])
+
+
+def _distortion(model: str, intrinsics: np.ndarray) -> np.ndarray | None:
+    """What OpenCV gets as distCoeffs: None for no coefficients, or a pinhole's (all zero, of any length)."""
+    dist = intrinsics[4:]
+    return dist if len(dist) and model != "pinhole" else None
+
+
+def full_intrinsics(model: str, intrinsics) -> np.ndarray:
+    """The intrinsics with exactly the model's number of coefficients (an ``opencv8`` lens written with 4 or
+    5 is padded with zeros, one with 12 or 14 cut to 8 when the rest are zero), for consumers that need
+    exactly that many (mrcal's OPENCV8); ValueError when the lens does not fit."""
+    intrinsics = np.asarray(intrinsics, dtype=np.float64)
+    need = N_DISTORTION[check_model(model)]
+    dist = intrinsics[4:]
+    if len(dist) < need and model == "opencv8":
+        dist = np.concatenate([dist, np.zeros(need - len(dist))])
+    elif len(dist) > need and not np.any(dist[need:]):
+        dist = dist[:need]
+    if len(dist) != need:
+        raise InputError(f"{len(dist)} distortion coefficients do not fit a {need}-coefficient {model!r} lens "
+                         f"(those beyond the first {need} are not all zero)")
+    return np.concatenate([intrinsics[:4], dist])
 
 
 def project(model: str, intrinsics, points, rvec=None, tvec=None, jacobian: bool = False):
@@ -54,7 +79,7 @@ def project(model: str, intrinsics, points, rvec=None, tvec=None, jacobian: bool
         j_intr, j_pose = jac[:, :, 0:8], jac[:, :, 8:14]
     else:
         check_model(model)
-        px, jac = cv2.projectPoints(pts, r, t, K, dist if len(dist) else None)
+        px, jac = cv2.projectPoints(pts, r, t, K, _distortion(model, intrinsics))
         jac = jac.reshape(n, 2, -1)
         j_intr = jac[:, :, 6:6 + len(intrinsics)]
         j_pose = jac[:, :, 0:6]
@@ -70,7 +95,7 @@ def unproject(model: str, intrinsics, pixels) -> np.ndarray:
         return _unproject_fisheye(intrinsics, px)
     check_model(model)
     K = camera_matrix(intrinsics)
-    dist = intrinsics[4:] if len(intrinsics) > 4 else None
+    dist = _distortion(model, intrinsics)
     if dist is None:
         norm = cv2.undistortPoints(px.reshape(-1, 1, 2), K, None).reshape(-1, 2)
     else:
@@ -85,6 +110,25 @@ def unproject(model: str, intrinsics, pixels) -> np.ndarray:
     back = project(model, intrinsics, rays)
     rays[np.linalg.norm(back - px, axis=1) > 0.01] = np.nan
     return rays
+
+
+def normalised(model: str, intrinsics, pixels) -> np.ndarray:
+    """Normalised ray coordinates (x/z, y/z) (N,2) of pixels (N,2), by OpenCV's own inverse of the lens.
+
+    The renderer builds its warp maps from this (``render/camera.py pinhole_plan``), so its iteration
+    settings are part of what a rendered frame looks like: they stay as they are. ``unproject`` (unit rays,
+    folds rejected, fisheye beyond 90 degrees) is the calibration side's inverse."""
+    intrinsics = np.asarray(intrinsics, dtype=np.float64)
+    uv = np.asarray(pixels, dtype=np.float64).reshape(-1, 1, 2)
+    K, dist = camera_matrix(intrinsics), _distortion(check_model(model), intrinsics)
+    if model == "fisheye":
+        xy = cv2.fisheye.undistortPoints(uv, K, dist)
+    elif dist is not None:
+        crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-10)
+        xy = cv2.undistortPointsIter(uv, K, dist, None, None, crit)
+    else:
+        xy = cv2.undistortPoints(uv, K, None)
+    return xy.reshape(-1, 2)
 
 
 def _unproject_fisheye(intrinsics: np.ndarray, px: np.ndarray) -> np.ndarray:

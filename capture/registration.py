@@ -21,11 +21,12 @@ import cv2
 import numpy as np
 
 from . import lens
-from .camera_file import CameraModel
+from .camera import Camera
 from isu_validate.tomlfile import read_toml
+from isu_validate.errors import UserError
 
 
-class RegistrationError(ValueError):
+class RegistrationError(UserError, ValueError):
     """The markers could not give a camera pose."""
 
 
@@ -63,8 +64,8 @@ def detect_markers(image: np.ndarray, dictionary: str) -> dict[int, np.ndarray]:
     return {int(i): c.reshape(4, 2).astype(np.float64) for i, c in zip(ids.ravel(), corners)}
 
 
-def register(camera: CameraModel, image: np.ndarray, dictionary: str, markers: dict[int, np.ndarray],
-             source: str = "") -> CameraModel:
+def register(camera: Camera, image: np.ndarray, dictionary: str, markers: dict[int, np.ndarray],
+             source: str = "") -> Camera:
     """The camera with its cabin pose set from the markers seen in ``image``."""
     if (image.shape[1], image.shape[0]) != camera.size:
         raise RegistrationError(f"registration image is {image.shape[1]}x{image.shape[0]} but the camera was "
@@ -86,7 +87,7 @@ def register(camera: CameraModel, image: np.ndarray, dictionary: str, markers: d
                    registered=True, registration=info)
 
 
-def _pnp(camera: CameraModel, obj: np.ndarray, px: np.ndarray):
+def _pnp(camera: Camera, obj: np.ndarray, px: np.ndarray):
     # PnP on unprojected rays works for every lens model (solvePnP itself knows no fisheye).
     rays = camera.unproject(px)
     ok = np.all(np.isfinite(rays), axis=1) & (rays[:, 2] > 0.05)

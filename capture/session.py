@@ -8,12 +8,14 @@ from __future__ import annotations
 
 import datetime as _dt
 import json
-import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
 import cv2
+
+from isu_validate.atomic import atomic_path, write_text
+from isu_validate.errors import InputError
 
 from .sources import CaptureError, ExposureRequest, Frame, FrameSource
 
@@ -26,20 +28,13 @@ class Session:
     error: str | None = None
 
 
-def _atomic_write_text(path: Path, text: str) -> None:
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
-
-
 def _atomic_write_png(path: Path, image) -> None:
-    tmp = path.with_name(f".{path.stem}.tmp.png")
-    if not cv2.imwrite(str(tmp), image):
-        raise OSError(f"could not write {path} (disk full or read-only?)")
-    os.replace(tmp, path)
+    with atomic_path(path, keep_suffix=True) as tmp:   # cv2 picks the format by the suffix
+        if not cv2.imwrite(str(tmp), image):
+            raise OSError(f"could not write {path} (disk full or read-only?)")
 
 
-def shoot(source: FrameSource, n_frames: int, out: str | Path, request: ExposureRequest = ExposureRequest(),
+def shoot(source: FrameSource, n_frames: int, out: str | Path, request: ExposureRequest | None = None,
           progress=None, first_index: int | None = None, annotate: Callable[[Path, Frame], dict] | None = None
           ) -> Session:
     """Take ``n_frames`` frames into ``out``; raises CaptureError (frames kept) when the camera fails.
@@ -47,12 +42,13 @@ def shoot(source: FrameSource, n_frames: int, out: str | Path, request: Exposure
     ``first_index``: add to the frames already in ``out``, numbering on from there (a pair's ``real/``),
     with this session's record in ``session_<first>.json``; otherwise ``out`` must hold no frames.
     ``annotate(path, frame)``: called once each frame is on disk; what it returns joins the sidecar."""
+    request = ExposureRequest() if request is None else request   # automatic exposure
     if n_frames <= 0:
-        raise ValueError(f"--frames must be positive, got {n_frames}")
+        raise InputError(f"--frames must be positive, got {n_frames}")
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     if first_index is None and any(out.glob("frame_*.png")):
-        raise ValueError(f"{out} already holds frames from another session; choose a new --out folder")
+        raise InputError(f"{out} already holds frames from another session; choose a new --out folder")
     start = first_index or 0
     record_name = "session.json" if first_index is None else f"session_{start:04d}.json"
     session = Session(out)
@@ -65,7 +61,7 @@ def shoot(source: FrameSource, n_frames: int, out: str | Path, request: Exposure
         record["status"] = status
         record["frames"] = [p.name for p in session.frames]
         record["error"] = session.error
-        _atomic_write_text(out / record_name, json.dumps(record, indent=2))
+        write_text(out / record_name, json.dumps(record, indent=2))
 
     save("running")
     try:
@@ -78,7 +74,7 @@ def shoot(source: FrameSource, n_frames: int, out: str | Path, request: Exposure
                 meta = dict(frame.meta, frame=path.name, requested=record["requested"])
                 if annotate:
                     meta.update(annotate(path, frame))
-                _atomic_write_text(path.with_suffix(".json"), json.dumps(meta, indent=2, default=str))
+                write_text(path.with_suffix(".json"), json.dumps(meta, indent=2, default=str))
                 session.frames.append(path)
                 for w in meta.get("warnings", []):
                     if w not in session.warnings:

@@ -17,11 +17,12 @@ from threadpoolctl import threadpool_limits
 
 from . import lens
 from .board import Detection
+from isu_validate.errors import UserError
 
 MIN_CORNERS_PER_FRAME = 6
 
 
-class CalibrationError(ValueError):
+class CalibrationError(UserError, ValueError):
     """The data cannot be calibrated (too little of it, or no consistent solution)."""
 
 
@@ -375,7 +376,7 @@ def _solve_from(model, frames, size, start, *, outlier_sigma: float = 4.0, noise
     x = _robust_start(model, frames, masks, np.concatenate([intr, np.column_stack([rvecs, tvecs]).ravel()]),
                       scale_px=robust_scale_px)
     rounds = 0
-    for rounds in range(1, max_rounds + 1):
+    for rounds in range(1, max_rounds + 1):  # noqa: B007 (the rounds taken are reported)
         sol_res = [d.pixels - lens.project(model, x[:len(intr)], d.board_points, *p)
                    for d, p in zip(frames, _poses(x, model, len(frames)))]
         inlier_res = np.concatenate([r[m] for r, m in zip(sol_res, masks)])

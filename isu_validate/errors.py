@@ -8,3 +8,12 @@ a bug in isu-validate and keeps its traceback. Domain errors (``SpaceError``, ``
 
 class UserError(Exception):
     """A problem the user can fix; its message names the problem and the fix."""
+
+
+class InputError(UserError, ValueError):
+    """A value the user gave (an option, an argument, a file's content) that cannot be used. A
+    ``ValueError`` too: callers that catch those (argparse types, older code) keep working."""
+
+
+class InputNotFound(UserError, FileNotFoundError):
+    """A file or folder the user named, or one the installation should hold, is not there."""

@@ -15,6 +15,7 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Iterable, Iterator
 
 from .archive import TestRecord
+from .errors import InputError
 from .pipeline import Job, PipelineConfig, check_pipeline, close_pipeline, close_pipelines, evaluate_job, open_pipeline
 
 DASK_CONNECT_TIMEOUT_S = 10
@@ -115,7 +116,7 @@ def make_executor(config: PipelineConfig, workers: int = 1, cluster: str | None 
     if cluster:
         return DaskExecutor(config, cluster)
     if workers < 1:
-        raise ValueError(f"--workers must be at least 1, got {workers}")
+        raise InputError(f"--workers must be at least 1, got {workers}")
     return InProcessExecutor(config) if workers == 1 else LocalPoolExecutor(config, workers)
 
 

@@ -4,6 +4,7 @@ Layout (a contract, ARCHITECTURE.md)::
 
     PAIRS/pairs.json              how the samples were chosen and ordered (``recreate``)
     PAIRS/index.html              every recreation sheet, one A4 page each
+    PAIRS/nst.json                ``stylize --pairs``: settings, per-image timings and preservation, answer flips
     PAIRS/<sample>/scene.json     the run's label file (scene and truth), byte for byte
     PAIRS/<sample>/sim.png        the render the SUT saw in the run
     PAIRS/<sample>/sim.label.json the renderer's label beside it (visible parts), when the run kept one
@@ -26,19 +27,18 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp")
+from .atomic import write_text
+from .errors import UserError
+from .image_files import IMAGE_SUFFIXES
+
 ROLES = ("sim", "real", "nst")
 MANIFEST = "pairs.json"
+INDEX = "index.html"
+NST_REPORT = "nst.json"
 
 
-class PairsError(ValueError):
+class PairsError(UserError, ValueError):
     """A pairs directory (or one of its samples) that cannot be used; the message names the fix."""
-
-
-def write_atomic(path: Path, text: str) -> None:
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
 
 
 @dataclass(frozen=True)
@@ -163,7 +163,7 @@ class Sample:
         raw.setdefault("votes", {})[annotator] = {
             "same": bool(same), "at": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
             **({"note": note} if note else {})}
-        write_atomic(self.votes_file, json.dumps(raw, indent=2) + "\n")
+        write_text(self.votes_file, json.dumps(raw, indent=2) + "\n")
 
 
 class PairsDir:
@@ -222,9 +222,19 @@ class PairsDir:
         except (OSError, ValueError):
             return {}
 
+    @property
+    def index_file(self) -> Path:
+        """Every recreation sheet, one A4 page each (``recreate``)."""
+        return self.root / INDEX
+
+    @property
+    def nst_report(self) -> Path:
+        """``stylize --pairs``'s settings, timings, preservation and answer flips."""
+        return self.root / NST_REPORT
+
     def write_manifest(self, data: dict[str, Any]) -> None:
         self.root.mkdir(parents=True, exist_ok=True)
-        write_atomic(self.manifest_file, json.dumps(data, indent=2, default=str) + "\n")
+        write_text(self.manifest_file, json.dumps(data, indent=2, default=str) + "\n")
 
     # ---- writing a sample (recreate)
     def new_sample(self, name: str, label_file: Path, render: Path, camera: Path | None,

@@ -9,6 +9,8 @@ import os
 import sys
 from pathlib import Path
 
+from .errors import InputNotFound
+
 
 def _candidates() -> list[Path]:
     found = []
@@ -24,7 +26,7 @@ def home() -> Path:
     for root in _candidates():
         if (root / "rigs").is_dir():
             return root
-    raise FileNotFoundError(
+    raise InputNotFound(
         "cannot find isu-validate's rigs/ folder; set ISU_VALIDATE_HOME to the folder that holds rigs/ and data/"
     )
 
@@ -42,10 +44,10 @@ def resolve_rig(kind: str, name_or_path: str | os.PathLike) -> Path:
     path = Path(name_or_path)
     if path.suffix == ".toml" or path.exists():
         if not path.exists():
-            raise FileNotFoundError(f"{kind} rig file {path} does not exist")
+            raise InputNotFound(f"{kind} rig file {path} does not exist")
         return path
     shipped = rigs_dir() / kind / f"{name_or_path}.toml"
     if not shipped.exists():
         names = sorted(p.stem for p in (rigs_dir() / kind).glob("*.toml"))
-        raise FileNotFoundError(f"no {kind} rig named {name_or_path!r}; shipped ones: {', '.join(names) or 'none'}")
+        raise InputNotFound(f"no {kind} rig named {name_or_path!r}; shipped ones: {', '.join(names) or 'none'}")
     return shipped

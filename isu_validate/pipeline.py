@@ -11,40 +11,17 @@ import importlib
 import json
 import time
 import traceback
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .archive import TestRecord
+from .archive import RunDir, TestRecord
+from .archive.run_dir import IMAGES_DIR, LABELS_DIR
 from .protocols import RenderError, SUTResponse
 from .evaluate.occlusion import nothing_to_judge
 from .space import SceneSpace, load_space
-
-
-@dataclass(frozen=True)
-class PipelineConfig:
-    run_dir: str
-    space: str = "isu-paper"
-    sut: str = "reference"
-    mode: str = "vqa"                 # "vqa" or "vc"
-    threshold: float | None = None    # oracle threshold; None = the judge's default
-    prompt: str | None = None         # None = generated from the space / default caption prompt
-    prompt_style: str = "paper"       # VQA prompt wording: "paper" (Figure 2) or "compact" (sut.prompt)
-    caption_template: str | None = None  # reference-caption template name or file; None = the space's
-    repeats: int = 1
-    preset: str = "draft"
-    camera: str = "default"
-    cabin: str = "default"
-    channels: tuple[str, ...] = ()
-    sut_timeout_s: float = 60.0
-    sut_options: dict = field(default_factory=dict)  # adapter options (never secrets: keys come from env)
-    render_threads: int = 0           # Cycles threads per renderer (0 = all cores; split them across workers)
-    extrinsics_from: str | None = None  # camera rig whose cabin pose replaces the camera's own
-    min_visible: dict = field(default_factory=dict)  # visibility thresholds {feature or "*": share} over the space's
-    factory: str = "isu_validate.pipeline:build_components"
-
-    def to_dict(self) -> dict:
-        return asdict(self)
+from .config import PipelineConfig   # defined in a light module (the CLI shows its defaults)
+from .errors import InputError
 
 
 @dataclass
@@ -91,7 +68,7 @@ def build_components(config: PipelineConfig, space: SceneSpace) -> Components:
 def check_render_settings(config: PipelineConfig, space: SceneSpace) -> None:
     """Refuse, before a run writes anything, a camera whose pose was never registered (with the fix)
     and visibility thresholds that name no feature or lie outside [0, 1]."""
-    from .render import load_render_camera
+    from capture.camera import load_render_camera
     from .render.visibility import min_visible_for, needed_parts
 
     load_render_camera(config.camera, config.extrinsics_from)
@@ -102,11 +79,11 @@ def check_render_settings(config: PipelineConfig, space: SceneSpace) -> None:
 def _load_factory(path: str):
     module, _, name = path.partition(":")
     if not module or not name:
-        raise ValueError(f"pipeline factory must be 'module:function', got {path!r}")
+        raise InputError(f"pipeline factory must be 'module:function', got {path!r}")
     try:
         return getattr(importlib.import_module(module), name)
     except (ImportError, AttributeError) as exc:
-        raise ValueError(f"cannot load the pipeline factory {path!r}: {exc}") from None
+        raise InputError(f"cannot load the pipeline factory {path!r}: {exc}") from None
 
 
 class Pipeline:
@@ -121,7 +98,7 @@ class Pipeline:
 
     def evaluate(self, job: Job) -> TestRecord:
         if not self._dirs_made:
-            for sub in ("images", "labels"):
+            for sub in (IMAGES_DIR, LABELS_DIR):
                 (self.run_dir / sub).mkdir(parents=True, exist_ok=True)
             self._dirs_made = True
         canonical = self.space.check(job.scene)
@@ -146,10 +123,10 @@ class Pipeline:
                  "truth": {q.key: q.truth for q in self.space.questions(canonical)}}
         if record is not None:
             label.update(visibility=record.visibility, occluded=record.occluded)
-        (self.run_dir / "labels" / f"{job.test_id}.json").write_text(json.dumps(label, indent=2))
+        RunDir(self.run_dir).label_file(job.test_id).write_text(json.dumps(label, indent=2))
 
     def _render(self, record: TestRecord) -> Path | None:
-        out = self.run_dir / "images" / f"{record.test_id}.png"
+        out = RunDir(self.run_dir).image_file(record.test_id)
         start = time.perf_counter()
         try:
             result = self.parts.renderer.render(record.canonical, out)

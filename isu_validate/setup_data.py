@@ -26,6 +26,8 @@ import shutil
 import sys
 from pathlib import Path
 
+from .atomic import atomic_path
+
 DEBIAN_WORDNET = Path("/usr/share/wordnet")
 
 # The files nltk's WordNetCorpusReader opens (data/index per part of speech,
@@ -78,9 +80,8 @@ def install_wordnet(nltk_data: Path | None = None, source: Path = DEBIAN_WORDNET
     for name in WORDNET_FILES:
         src, dst = source / name, target / name
         if src.is_file() and not (dst.is_file() and dst.stat().st_size == src.stat().st_size):
-            tmp = dst.with_suffix(dst.suffix + ".tmp")
-            shutil.copyfile(src, tmp)
-            os.replace(tmp, dst)  # atomic: a parallel reader never sees half a file
+            with atomic_path(dst) as tmp:  # a parallel reader never sees half a file
+                shutil.copyfile(src, tmp)
     lexnames = target / "lexnames"
     if not lexnames.is_file() or lexnames.read_text() != lexnames_text():
         lexnames.write_text(lexnames_text())
@@ -89,7 +90,8 @@ def install_wordnet(nltk_data: Path | None = None, source: Path = DEBIAN_WORDNET
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m isu_validate.setup_data", description=__doc__.split("\n")[0])
-    parser.add_argument("--target", type=Path, default=None, help="nltk_data folder (default: %(default)s -> sys.prefix/nltk_data)")
+    parser.add_argument("--target", type=Path, default=None,
+                        help="nltk_data folder (default: %(default)s -> sys.prefix/nltk_data)")
     parser.add_argument("--source", type=Path, default=DEBIAN_WORDNET, help="WordNet 3.0 database folder")
     parser.add_argument("--skip-anny", action="store_true", help="do not build the anny body model's data")
     args = parser.parse_args(argv)

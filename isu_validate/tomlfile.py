@@ -5,12 +5,14 @@ import os
 import tomllib
 from pathlib import Path
 
+from .errors import InputNotFound
+
 
 def read_toml(path: str | os.PathLike, error: type[Exception], what: str = "file") -> dict:
     """The file's tables; FileNotFoundError when missing, ``error`` (naming the file) when not TOML."""
     path = Path(path)
     if not path.exists():
-        raise FileNotFoundError(f"{what} {path} does not exist")
+        raise InputNotFound(f"{what} {path} does not exist")
     try:
         return tomllib.loads(path.read_text())
     except tomllib.TOMLDecodeError as exc:

@@ -22,6 +22,7 @@ def ycc_to_rgb(x: torch.Tensor) -> torch.Tensor:
 def preserve_colour(stylised: torch.Tensor, content: torch.Tensor) -> torch.Tensor:
     """The stylised luma with the content's chroma, both (N, 3, H, W) RGB in 0..1."""
     if stylised.shape != content.shape:
-        raise ValueError(f"colour preservation needs equal sizes, got {tuple(stylised.shape)} and {tuple(content.shape)}")
+        raise ValueError("colour preservation needs equal sizes, "
+                         f"got {tuple(stylised.shape)} and {tuple(content.shape)}")
     mixed = torch.cat([rgb_to_ycc(stylised)[:, :1], rgb_to_ycc(content)[:, 1:]], dim=1)
     return ycc_to_rgb(mixed).clamp(0, 1)

@@ -7,13 +7,15 @@ Training checkpoints every few steps and resumes from the checkpoint when interr
 from __future__ import annotations
 
 import hashlib
-import os
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Callable, Sequence
 
 import torch
+
+from isu_validate.atomic import atomic_path
+from isu_validate.errors import InputError, InputNotFound
 
 from .fast_net import FastNetConfig, FastStyleNet
 from .imageio import load_image
@@ -58,7 +60,7 @@ class CropSampler:
 
     def __init__(self, paths: Sequence[Path], crop: int, seed: int):
         if not paths:
-            raise ValueError("training needs at least one content image (a folder of renders)")
+            raise InputError("training needs at least one content image (a folder of renders)")
         self.crop = crop
         # keep a margin above the crop so crops vary in position
         self.images = [self._fit_short_side(load_image(p), round(crop * 1.25)) for p in paths]
@@ -138,10 +140,8 @@ def _plain(d: dict) -> dict:
 
 
 def _atomic_save(obj, path: Path) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + f".{os.getpid()}.tmp")
-    torch.save(obj, tmp)
-    os.replace(tmp, path)
+    with atomic_path(path) as tmp:
+        torch.save(obj, tmp)
 
 
 def save_model(net: FastStyleNet, path: Path, meta: dict) -> Path:
@@ -152,14 +152,14 @@ def save_model(net: FastStyleNet, path: Path, meta: dict) -> Path:
 def load_model(path: Path) -> tuple[FastStyleNet, dict]:
     path = Path(path)
     if not path.is_file():
-        raise FileNotFoundError(f"fast style model {path} does not exist; train one with "
+        raise InputNotFound(f"fast style model {path} does not exist; train one with "
                                 "`isu-validate stylize train --style REAL.png --content RENDERS/ --out MODEL`")
     try:
         state = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as exc:  # torch raises several types for damaged files
-        raise ValueError(f"cannot read fast style model {path}: {exc}; retrain it") from exc
+        raise InputError(f"cannot read fast style model {path}: {exc}; retrain it") from exc
     if not isinstance(state, dict) or state.get("format") != FORMAT:
-        raise ValueError(f"{path} is not an isu-validate fast style model (format {FORMAT})")
+        raise InputError(f"{path} is not an isu-validate fast style model (format {FORMAT})")
     net = FastStyleNet(FastNetConfig(**state["net"]))
     net.load_state_dict(state["state_dict"])
     return net.eval(), state["meta"]

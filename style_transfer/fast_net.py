@@ -14,6 +14,8 @@ import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
+from isu_validate.errors import InputError
+
 
 @dataclass(frozen=True)
 class FastNetConfig:
@@ -64,7 +66,8 @@ class FastStyleNet(nn.Module):
     def forward(self, x: torch.Tensor, seed: int = 0) -> torch.Tensor:
         """(N, 3, H, W) RGB 0..1 to the stylised image, same size, 0..1; ``seed`` draws the noise."""
         if min(x.shape[-2:]) < 16:
-            raise ValueError(f"image of {tuple(x.shape[-2:])} pixels is too small for the fast style net (16x16 at least)")
+            raise InputError(f"image of {tuple(x.shape[-2:])} pixels is too small for the fast style net "
+                             "(16x16 at least)")
         sizes = []
         h = x
         for layer in self.down:

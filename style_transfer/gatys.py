@@ -11,6 +11,8 @@ from typing import Callable
 
 import torch
 
+from isu_validate.errors import InputError
+
 from .colour import preserve_colour
 from .losses import content_loss, gram, style_loss, tv_loss
 from .vgg import VGG19, preprocess
@@ -38,13 +40,13 @@ class GatysConfig:
 
     def check(self) -> None:
         if self.optimizer not in ("lbfgs", "adam"):
-            raise ValueError(f"optimizer must be lbfgs or adam, got {self.optimizer!r}")
+            raise InputError(f"optimizer must be lbfgs or adam, got {self.optimizer!r}")
         if self.init not in ("content", "noise"):
-            raise ValueError(f"init must be content or noise, got {self.init!r}")
+            raise InputError(f"init must be content or noise, got {self.init!r}")
         if self.steps < 1 or self.size < 16:
-            raise ValueError("steps must be >= 1 and size >= 16 pixels")
+            raise InputError("steps must be >= 1 and size >= 16 pixels")
         if not self.content_layers or not self.style_layers:
-            raise ValueError("give at least one content layer and one style layer")
+            raise InputError("give at least one content layer and one style layer")
 
 
 @dataclass

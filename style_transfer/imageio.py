@@ -1,12 +1,14 @@
 """Images as (1, 3, H, W) float tensors in 0..1, resized with anti-aliasing."""
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
 import torch
 from PIL import Image, UnidentifiedImageError
+
+from isu_validate.atomic import atomic_path
+from isu_validate.errors import InputError, InputNotFound
 
 
 def load_image(path: str | Path, max_side: int | None = None) -> torch.Tensor:
@@ -15,9 +17,9 @@ def load_image(path: str | Path, max_side: int | None = None) -> torch.Tensor:
         with Image.open(path) as img:
             img = img.convert("RGB")
     except FileNotFoundError:
-        raise
+        raise InputNotFound(f"image {path} does not exist") from None
     except (UnidentifiedImageError, OSError) as exc:
-        raise ValueError(f"cannot read image {path}: {exc}; re-export it as PNG") from exc
+        raise InputError(f"cannot read image {path}: {exc}; re-export it as PNG") from exc
     if max_side:
         img = fit(img, max_side)
     return to_tensor(img)
@@ -58,7 +60,6 @@ def save_image(x: torch.Tensor, path: str | Path, size: tuple[int, int] | None =
     if size and img.size != tuple(size):
         img = img.resize(tuple(size), Image.Resampling.LANCZOS)
     # write then rename: an interrupt never leaves a half-written PNG that a resumed run would keep
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    img.save(tmp, format="PNG", compress_level=1)  # fast: level 6 costs more than the network
-    os.replace(tmp, path)
+    with atomic_path(path) as tmp:
+        img.save(tmp, format="PNG", compress_level=1)  # fast: level 6 costs more than the network
     return path

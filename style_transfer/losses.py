@@ -13,13 +13,13 @@ def gram(features: torch.Tensor) -> torch.Tensor:
 
 
 def content_loss(features: dict, targets: dict, layers) -> torch.Tensor:
-    return sum(F.mse_loss(features[l], targets[l]) for l in layers) / len(layers)
+    return sum(F.mse_loss(features[layer], targets[layer]) for layer in layers) / len(layers)
 
 
 def style_loss(features: dict, target_grams: dict, layers) -> torch.Tensor:
     # target grams have batch 1; they broadcast over a training batch
-    return sum(F.mse_loss(gram(features[l]), target_grams[l].expand(features[l].shape[0], -1, -1))
-               for l in layers) / len(layers)
+    return sum(F.mse_loss(gram(features[layer]), target_grams[layer].expand(features[layer].shape[0], -1, -1))
+               for layer in layers) / len(layers)
 
 
 def tv_loss(x: torch.Tensor) -> torch.Tensor:

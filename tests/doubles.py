@@ -66,7 +66,8 @@ class BlindSUT:
     def query(self, request: SUTRequest) -> SUTResponse:
         import json
 
-        label = json.loads((Path(request.image).parent.parent / "labels" / (Path(request.image).stem + ".json")).read_text())
+        label = json.loads((Path(request.image).parent.parent / "labels"
+                            / (Path(request.image).stem + ".json")).read_text())
         scene = label["scene"]
         if os.environ.get("ISU_TEST_SUT_ERROR_WITH_BOTTLE") and scene.get("colabottle_codriver_seat") == "YES":
             return SUTResponse(raw="<html>502 Bad Gateway</html>", error="HTTP 502 from the SUT (test double)")

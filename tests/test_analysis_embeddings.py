@@ -29,7 +29,8 @@ def test_inception_embeddings_drive_the_clusters(tmp_path, monkeypatch):
     first, second = space.sample(np.random.default_rng(7), 2)
     # scenes pair tests 0+1 and 2+3; the images pair 0+2 (noise) and 1+3 (smooth ramps): only the
     # image embedding can give the second grouping
-    run = make_run(tmp_path / "r", [{"scene": s, "wrong": {"driver_gender": "NONE"}} for s in (first, first, second, second)])
+    run = make_run(tmp_path / "r", [{"scene": s, "wrong": {"driver_gender": "NONE"}}
+                                    for s in (first, first, second, second)])
     rng = np.random.default_rng(0)
     ramp = np.linspace(0, 255, 64)[None, :, None] * np.ones((48, 1, 3))
     for i, path in enumerate(sorted((run / "images").glob("*.png"))):

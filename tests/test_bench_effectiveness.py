@@ -2,7 +2,6 @@
 the printed table, and the resumable real-pipeline mode."""
 import json
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -129,7 +128,8 @@ def test_the_entropy_gap_is_checked_over_several_clusterings():
     # every failure of "narrow" is one scene: lower entropy than rs's spread failures in every clustering
     narrow = outcome("narrow", 0, [0.5] * 12)
     one = narrow.records[0]
-    narrow.records = [Record(f"n{i}", 0, i, "narrow", 0, one.scene_key, one.scene, one.canonical, primary=0.5, failed=True)
+    narrow.records = [Record(f"n{i}", 0, i, "narrow", 0, one.scene_key, one.scene, one.canonical,
+                             primary=0.5, failed=True)
                       for i in range(12)]
     rs = [outcome("rs", s, [0.5] * 12) for s in range(1, 3)]
     summary = summarize(SPACE, "made-up", "narrow failures", [narrow] + rs)
@@ -191,7 +191,7 @@ def test_bench_search_splits_the_search_from_the_durable_commit(capsys):
     assert out.count("search overhead") == 2 and "(surrogate, pop 20" in out and "(rs, pop 20" in out
     rows = [line.split() for line in out.splitlines() if line.strip().startswith(("60 ", "120 "))]
     assert len(rows) == 4
-    for size, total, search, commit, cpu, *_ in rows:
+    for _size, total, search, commit, cpu, *_ in rows:
         assert float(search) + float(commit) <= float(total) + 1e-6 and float(cpu) > 0
 
 

@@ -7,7 +7,8 @@ import cv2
 import numpy as np
 import pytest
 
-from capture import camera_file, synthetic
+from capture import synthetic
+from capture.camera import read_toml
 from capture.board import BoardSpec, detect
 from isu_validate.cli import main
 
@@ -50,7 +51,7 @@ def test_calibrate_writes_the_camera_file_report_and_json(shots, tmp_path, capsy
                "--report", str(report), "--cameramodel", str(mrcal), "--json", "--name", "cam <script>x</script>"])
     assert rc == 0
     doc = json.loads(capsys.readouterr().out)
-    cam = camera_file.read_toml(out)
+    cam = read_toml(out)
     assert doc["intrinsics"]["fx"] == cam.intrinsics[0]
     assert np.abs(cam.intrinsics[:4] - TRUTH.intrinsics[:4]).max() < 2.0
     assert cam.quality["frames"] == 9 and cam.quality["rms_px"] < 0.3
@@ -100,7 +101,8 @@ def test_images_of_different_sizes_are_refused(shots, tmp_path, capsys):
 
 def test_a_wrong_board_spec_is_a_clear_error(shots, tmp_path, capsys):
     folder, _ = shots
-    rc = main(["calibrate", str(folder), "--board", "charuco:7x5:0.04:0.03:DICT_4X4_50", "--out", str(tmp_path / "x.toml")])
+    rc = main(["calibrate", str(folder), "--board", "charuco:7x5:0.04:0.03:DICT_4X4_50",
+               "--out", str(tmp_path / "x.toml")])
     assert rc == 2
     assert "board spec" in capsys.readouterr().err
     assert main(["calibrate", str(folder), "--board", "charuco:11x8", "--out", str(tmp_path / "x.toml")]) == 2
@@ -128,14 +130,14 @@ def test_black_and_unreadable_frames_are_skipped_with_a_reason(tmp_path):
 
 
 def test_pose_copied_from_a_rig_and_the_placeholder_warning(shots, tmp_path, capsys):
-    from isu_validate.render.camera import load_camera
+    from capture.camera import load_camera
     folder, _ = shots
     out = tmp_path / "cam.toml"
     assert main(["calibrate", str(folder), "--board", SPEC, "--model", "pinhole", "--out", str(out),
                  "--no-cross-validation", "--extrinsics-from", "default"]) == 0
-    cam, rig = camera_file.read_toml(out), load_camera("default")
+    cam, rig = read_toml(out), load_camera("default")
     assert cam.registered and np.allclose(cam.position, rig.position) and np.allclose(cam.rotation, rig.rotation)
     assert main(["calibrate", str(folder), "--board", SPEC, "--model", "pinhole", "--out", str(out),
                  "--no-cross-validation"]) == 0
     assert "camera pose not registered" in capsys.readouterr().err
-    assert camera_file.read_toml(out).registered is False
+    assert read_toml(out).registered is False

@@ -6,10 +6,9 @@ import numpy as np
 import pytest
 
 from capture import synthetic
-from capture.camera_file import CameraModel, read_toml, write_toml
+from capture.camera import Camera, look_at_rotation, read_toml, write_toml
 from capture.registration import RegistrationError, load_markers, register
 from isu_validate.cli import main
-from isu_validate.render.camera import look_at_rotation
 
 CAM = synthetic.TrueCamera("opencv8", (480.0, 480.0, 321.0, 238.5, -0.12, 0.03, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0), 640, 480)
 POSITION = np.array([0.6, 0.0, 1.13])
@@ -45,7 +44,7 @@ def _scene(tmp_path):
         lines += ["[[markers]]", f"id = {marker_id}", f"corners = {[[round(float(v), 6) for v in p] for p in cabin]}"]
     markers = tmp_path / "markers.toml"
     markers.write_text("\n".join(lines) + "\n")
-    camera = CameraModel("cam", CAM.model, CAM.width, CAM.height, np.array(CAM.intrinsics))
+    camera = Camera("cam", CAM.model, CAM.width, CAM.height, np.array(CAM.intrinsics))
     return image, markers, camera
 
 
@@ -86,7 +85,7 @@ def test_the_shipped_example_marker_file_registers_the_default_camera(tmp_path):
     """rigs/markers/example.toml, photographed through the default rig (markers drawn at their listed
     corners), gives back the default rig's pose through `calibrate register --markers example`."""
     from isu_validate.paths import rigs_dir
-    from isu_validate.render.camera import load_camera
+    from capture.camera import load_camera
 
     rig = load_camera("default")
     assert rig.model == "pinhole"
@@ -111,7 +110,7 @@ def test_the_shipped_example_marker_file_registers_the_default_camera(tmp_path):
         hit = np.abs(views[0].astype(int) - views[1].astype(int)) < 128   # where the plane is, not the background
         photo[hit] = views[0][hit]
     cv2.imwrite(str(tmp_path / "photo.png"), photo)
-    camera = CameraModel("cam", "pinhole", truth.width, truth.height, np.array(truth.intrinsics, dtype=float))
+    camera = Camera("cam", "pinhole", truth.width, truth.height, np.array(truth.intrinsics, dtype=float))
     write_toml(camera, tmp_path / "cam.toml")
     assert main(["calibrate", "register", str(tmp_path / "cam.toml"), str(tmp_path / "photo.png"),
                  "--markers", "example", "--out", str(tmp_path / "reg.toml")]) == 0

@@ -22,10 +22,11 @@ N_VIEWS = 20
 
 def test_calibrating_rendered_boards_recovers_the_rig(tmp_path):
     render = pytest.importorskip("isu_validate.render")
-    rig = render.load_camera().to_dict()
+    from capture.camera import camera_from_dict, load_camera
+    rig = load_camera().to_dict()
     rig["image"] = {"width": 400, "height": 300}
     rig["intrinsics"].update(RIG_INTRINSICS)
-    cam = render.camera_from_dict(rig, "loop rig")
+    cam = camera_from_dict(rig, "loop rig")
     truth = synthetic.TrueCamera(cam.model, (cam.fx, cam.fy, cam.cx, cam.cy, *cam.distortion), cam.width, cam.height)
 
     px_per_m, margin_m = 2500.0, BOARD.square_m / 2

@@ -141,7 +141,8 @@ def test_mixed_image_sizes_are_refused():
     _, dets = data(PINHOLE, 4, 0.3, seed=29)
     other = dets[0]
     dets.append(Detection("small.png", (320, 240), other.ids, other.pixels / 2, other.board_points))
-    with pytest.raises(ValueError, match=r"different sizes \(640x480: 4 image\(s\).*320x240: 1 image\(s\), e.g. small.png"):
+    with pytest.raises(ValueError,
+                       match=r"different sizes \(640x480: 4 image\(s\).*320x240: 1 image\(s\), e.g. small.png"):
         calibrate(dets, "pinhole", board=BOARD)
 
 

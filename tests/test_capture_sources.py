@@ -13,7 +13,7 @@ from capture.session import shoot
 from capture.sources import (DeviceBusy, DeviceDisconnected, DeviceNotFound, ExposureRequest, PermissionDenied,
                              open_source, parse_spec)
 from capture.sources.oak import DepthAISource, frame_meta
-from capture.sources.recorded import RecordedCapture, load_depthai_recording
+from tests.recorded_capture import RecordedCapture, load_depthai_recording
 from capture.sources.v4l2 import V4L2Source
 
 DATA = Path(__file__).parent / "data" / "capture"
@@ -183,7 +183,8 @@ def test_capture_commands_shoot_a_replayed_session_and_report_errors(tmp_path, c
                  "--out", str(tmp_path / "s"), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert len(out["frames"]) == 3 and json.loads((tmp_path / "s" / "session.json").read_text())["status"] == "complete"
-    assert main(["capture", "shoot", "--source", "v4l2:/dev/video99", "--frames", "1", "--out", str(tmp_path / "t")]) == 2
+    assert main(["capture", "shoot", "--source", "v4l2:/dev/video99", "--frames", "1",
+                 "--out", str(tmp_path / "t")]) == 2
     assert "/dev/video99 does not exist" in capsys.readouterr().err
     assert main(["capture", "list", "--json"]) in (0, 1)  # 1: no camera found
     assert set(json.loads(capsys.readouterr().out)) == {"v4l2", "depthai", "usb", "problems"}

@@ -5,7 +5,7 @@ import pytest
 
 from isu_validate.analysis.diversity import cluster_failures
 from isu_validate.cli import main
-from isu_validate.bench.effectiveness import command as bench
+from isu_validate.bench.effectiveness import bound as bound_module
 from isu_validate.bench.effectiveness.bound import KnownRiskSearch, RiskBank, risk_bank
 from isu_validate.bench.effectiveness.harness import simulate
 from isu_validate.bench.effectiveness.summary import summarize
@@ -74,7 +74,7 @@ def test_the_bound_beats_random_picks_on_a_planted_blind_spot():
 
 
 def test_the_bench_adds_the_bound_as_a_reference_row(monkeypatch, capsys):
-    monkeypatch.setattr(bench, "risk_bank", lambda space, sut: risk_bank(space, sut, size=300, seeds=2))
+    monkeypatch.setattr(bound_module, "risk_bank", lambda space, sut: risk_bank(space, sut, size=300, seeds=2))
     assert main(["bench", "effectiveness", "--suts", "blind-spots", "--algorithms", "surrogate,rs", "--seeds", "2",
                  "--budget", "24", "--pop-size", "8", "--bound", "2"]) == 0
     text = capsys.readouterr().out
@@ -92,7 +92,8 @@ def test_the_bound_is_measured_on_the_searches_clusters_without_moving_them():
     runs = [simulate(SPACE, sut, algo, seed, 30, 10) for algo in ("surrogate", "rs") for seed in (1, 2)]
     bank = risk_bank(SPACE, sut, size=300, seeds=2)
     bound = [simulate(SPACE, sut, "bound", seed, 30, 10,
-                      make=lambda sp, pop, sd: KnownRiskSearch(sp, pop, sd, bank, bank.risk(1.0), 2)) for seed in (1, 2)]
+                      make=lambda sp, pop, sd: KnownRiskSearch(sp, pop, sd, bank, bank.risk(1.0), 2))
+             for seed in (1, 2)]
     alone = summarize(SPACE, sut.name, "", runs, "rs", 4)
     both = summarize(SPACE, sut.name, "", runs + bound, "rs", 4, references=("bound",))
     for algo in ("surrogate", "rs"):

@@ -89,7 +89,8 @@ def test_identical_strings(space):
 def test_other_language_scores_low_but_defined(space):
     german = ("Eine lächelnde Frau in einem weißen T-Shirt fährt angeschnallt. Ein leerer Kindersitz steht auf dem "
               "Beifahrersitz, ein grauer Koffer liegt auf der Rückbank.")
-    ours, theirs = caption_metrics(GOOD, reference_caption(space, SCENE)), caption_metrics(german, reference_caption(space, SCENE))
+    ours, theirs = (caption_metrics(GOOD, reference_caption(space, SCENE)),
+                    caption_metrics(german, reference_caption(space, SCENE)))
     assert theirs["f_meteor"] < 0.1 < ours["f_meteor"] and theirs["f_emb"] < ours["f_emb"]
     assert theirs["f_bleu"] < 0.05
     assert all(math.isfinite(v) for v in theirs.values())
@@ -126,9 +127,11 @@ def test_caption_judge_and_oracles(space):
     assert good.details["threshold"] == 0.65 and "BLEU" in good.details["metrics"]["bleu"]
     # the conjunction fails only when every given metric is at or below its threshold
     strict = {"f_emb": 0.99, "f_bleu": 0.99, "f_meteor": 0.99, "f_bert": 0.99}
-    assert make_judge("vc", space, oracle="conjunction", threshold=strict).judge(SCENE, request, SUTResponse(caption=GOOD)).failed
+    assert make_judge("vc", space, oracle="conjunction", threshold=strict).judge(
+        SCENE, request, SUTResponse(caption=GOOD)).failed
     loose = dict(strict, f_bert=0.1)
-    assert not make_judge("vc", space, oracle="conjunction", threshold=loose).judge(SCENE, request, SUTResponse(caption=GOOD)).failed
+    assert not make_judge("vc", space, oracle="conjunction", threshold=loose).judge(
+        SCENE, request, SUTResponse(caption=GOOD)).failed
     with pytest.raises(ValueError, match="threshold per metric"):
         make_judge("vc", space, oracle="conjunction")
     with pytest.raises(ValueError, match="unknown caption metric"):
@@ -141,7 +144,8 @@ def test_repeated_captions_are_averaged(space):
     verdict = make_judge("vc", space).judge(SCENE, request, SUTResponse(caption=GOOD, extra={"captions": captions}))
     one = [caption_metrics(c, reference_caption(space, SCENE)) for c in captions]
     assert verdict.fitness["f_bleu"] == pytest.approx((one[0]["f_bleu"] + one[1]["f_bleu"]) / 2)
-    assert verdict.details["consistency"] == pytest.approx(f_emb(*captions)) and len(verdict.details["per_caption"]) == 2
+    assert (verdict.details["consistency"] == pytest.approx(f_emb(*captions))
+            and len(verdict.details["per_caption"]) == 2)
 
 
 def test_sut_error_is_not_a_failure(space):
@@ -162,7 +166,8 @@ def test_reference_caption_follows_the_papers_template_with_only_active_features
     text = reference_caption(space, bare)  # latent luggage colour and child-seat values are still in the dict
     assert "suitcase" not in text and "anthracite" not in text and "baby" not in text
     assert "parked in a courtyard at night with the interior lights on." in text
-    assert text.endswith("The driver is holding a phone in the hand. A cola can is visible on the front passenger seat.")
+    assert text.endswith("The driver is holding a phone in the hand. "
+                         "A cola can is visible on the front passenger seat.")
 
 
 def test_earlier_caption_wording_is_kept_by_name_and_a_wrong_template_is_named(space, tmp_path):

@@ -28,7 +28,8 @@ def space():
 
 def judge_answers(space, answers, threshold=None, **extra):
     request = build_request(space, SCENE, "x.png", "vqa")
-    return make_judge("vqa", space, threshold=threshold).judge(SCENE, request, SUTResponse(answers=answers, extra=extra))
+    return make_judge("vqa", space, threshold=threshold).judge(SCENE, request,
+                                                               SUTResponse(answers=answers, extra=extra))
 
 
 def test_all_correct_is_one(space):
@@ -92,7 +93,8 @@ def test_zero_weights_and_no_questions():
     verdict = make_judge("vqa", space).judge(scene, request, SUTResponse(answers={"a": "YES", "b": "YES"}))
     assert verdict.primary == pytest.approx(0.5) and "unweighted" in verdict.details["weighting"]
     bare = space_from_dict({"name": "bare", "features": {"c": {"type": "categorical", "values": ["X"]}}})
-    verdict = make_judge("vqa", bare).judge({"c": "X"}, build_request(bare, {"c": "X"}, "x.png", "vqa"), SUTResponse(answers={}))
+    verdict = make_judge("vqa", bare).judge({"c": "X"}, build_request(bare, {"c": "X"}, "x.png", "vqa"),
+                                            SUTResponse(answers={}))
     assert verdict.primary == 1.0 and not verdict.failed
 
 

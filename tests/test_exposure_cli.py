@@ -8,19 +8,18 @@ import cv2
 import numpy as np
 import pytest
 
-from capture import camera_file
+from capture.camera import load_camera, write_imaging
 from capture.camera_model import synthetic
-from capture.camera_model.colour_fit import srgb_encode
 from isu_validate.cli import main
-from isu_validate.render import load_camera
-from isu_validate.render.exr import write_exr
+from isu_validate.exr import write_exr
+from isu_validate.srgb import srgb_encode_float
 
 
 @pytest.fixture(scope="module")
 def camera(tmp_path_factory):
     """A camera file carrying the synthetic camera's model (noise included)."""
     out = tmp_path_factory.mktemp("cam") / "cam.toml"
-    return camera_file.write_imaging(load_camera("default").source, synthetic.camera(), out)
+    return write_imaging(load_camera("default").source, synthetic.camera(), out)
 
 
 def _exr(path: Path, linear: np.ndarray) -> Path:
@@ -51,7 +50,7 @@ def test_apply_on_a_run_develops_every_render_and_resumes(camera, tmp_path, caps
     assert main(["exposure", "apply", str(run), "--camera", str(camera)]) == 0     # resumes: nothing redone
     assert (out / "t0001.png").stat().st_mtime_ns == before
     assert len((out / "exposure.jsonl").read_text().splitlines()) == 3
-    other = camera_file.write_imaging(camera, synthetic.camera(seed=1).with_part(noise=None), tmp_path / "c2.toml")
+    other = write_imaging(camera, synthetic.camera(seed=1).with_part(noise=None), tmp_path / "c2.toml")
     assert main(["exposure", "apply", str(run), "--camera", str(other), "--out", str(out)]) == 2
     assert "another camera model" in capsys.readouterr().err
 
@@ -60,7 +59,7 @@ def test_apply_names_what_is_missing(tmp_path, capsys):
     (tmp_path / "run" / "images").mkdir(parents=True)
     assert main(["exposure", "apply", str(tmp_path / "run"), "--camera", "default"]) == 2
     assert "no imaging model" in capsys.readouterr().err
-    camera = camera_file.write_imaging(load_camera("default").source, synthetic.camera(), tmp_path / "c.toml")
+    camera = write_imaging(load_camera("default").source, synthetic.camera(), tmp_path / "c.toml")
     assert main(["exposure", "apply", str(tmp_path / "run"), "--camera", str(camera)]) == 2
     assert "--channels exr" in capsys.readouterr().err
 
@@ -70,7 +69,7 @@ def test_colour_writes_the_correction_and_extends_the_camera_file(camera, tmp_pa
     linear = synthetic.chart_scene(np.random.default_rng(5))
     real, _ = synthetic.apply(linear, truth)
     cv2.imwrite(str(tmp_path / "real.png"), cv2.cvtColor(real, cv2.COLOR_RGB2BGR))
-    cv2.imwrite(str(tmp_path / "sim.png"), cv2.cvtColor((srgb_encode(linear) * 255 + 0.5).astype(np.uint8),
+    cv2.imwrite(str(tmp_path / "sim.png"), cv2.cvtColor((srgb_encode_float(linear) * 255 + 0.5).astype(np.uint8),
                                                         cv2.COLOR_RGB2BGR))
     args = ["exposure", "colour", "--real", str(tmp_path / "real.png"), "--sim", str(tmp_path / "sim.png"),
             "--out", str(tmp_path / "ccm.json"), "--camera", str(camera), "--camera-out", str(tmp_path / "cam3.toml")]
@@ -97,7 +96,8 @@ def test_fit_on_a_single_exposure_says_what_to_capture(tmp_path, capsys):
     image, meta = synthetic.shoot(synthetic.camera(), synthetic.scene(np.random.default_rng(0), (60, 80)), 1,
                                   manual=(1000.0, 1.0))
     synthetic.write_frame(tmp_path / "one", "frame_0000", image, meta)
-    assert main(["exposure", "fit", str(tmp_path / "one"), "--camera", "default", "--out", str(tmp_path / "o.toml")]) == 2
+    assert main(["exposure", "fit", str(tmp_path / "one"), "--camera", "default",
+                 "--out", str(tmp_path / "o.toml")]) == 2
     err = capsys.readouterr().err
     assert "exposure bracket" in err and not (tmp_path / "o.toml").exists()
 
@@ -109,7 +109,7 @@ def test_check_compares_pairs_and_escapes_names_in_html(tmp_path, capsys):
         for folder, gain in (("sim", 1.0), ("real", 1.6)):
             (tmp_path / folder).mkdir(exist_ok=True)
             cv2.imwrite(str(tmp_path / folder / f"{name}.png"),
-                        (srgb_encode(linear * gain) * 255 + 0.5).astype(np.uint8))
+                        (srgb_encode_float(linear * gain) * 255 + 0.5).astype(np.uint8))
     cv2.imwrite(str(tmp_path / "sim" / "lonely.png"), np.zeros((8, 8, 3), np.uint8))
     assert main(["exposure", "check", str(tmp_path / "sim"), str(tmp_path / "real"), "--out", str(tmp_path / "chk"),
                  "--json"]) == 0
@@ -125,10 +125,11 @@ def test_check_reads_a_pairs_directory(tmp_path, capsys):
     for sample in ("s01", "s02"):
         linear = synthetic.scene(rng, (60, 80)) * 0.3
         (tmp_path / "pairs" / sample / "real").mkdir(parents=True)
-        cv2.imwrite(str(tmp_path / "pairs" / sample / "sim.png"), (srgb_encode(linear) * 255 + 0.5).astype(np.uint8))
+        cv2.imwrite(str(tmp_path / "pairs" / sample / "sim.png"),
+                    (srgb_encode_float(linear) * 255 + 0.5).astype(np.uint8))
         for k in range(2):
             cv2.imwrite(str(tmp_path / "pairs" / sample / "real" / f"frame_{k:04d}.png"),
-                        (srgb_encode(linear * 0.7) * 255 + 0.5).astype(np.uint8))
+                        (srgb_encode_float(linear * 0.7) * 255 + 0.5).astype(np.uint8))
     (tmp_path / "pairs" / "s03").mkdir()
     (tmp_path / "pairs" / "s03" / "scene.json").write_text("{}")     # recreated but not captured yet
     assert main(["exposure", "check", str(tmp_path / "pairs"), "--out", str(tmp_path / "chk"), "--json"]) == 0

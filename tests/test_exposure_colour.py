@@ -7,7 +7,8 @@ import pytest
 
 from capture.camera_model import chart, synthetic
 from capture.camera_model.apply import apply
-from capture.camera_model.colour_fit import SingularColourError, fit_colour, srgb_decode, srgb_encode
+from capture.camera_model.colour_fit import SingularColourError, fit_colour
+from isu_validate.srgb import srgb_decode, srgb_encode_float
 
 CORNERS = np.array([[200.0, 150.0], [430.0, 168.0], [422.0, 322.0], [192.0, 306.0]])
 
@@ -28,7 +29,7 @@ def _real(truth, linear, seed=0):
 
 
 def _sim(linear):
-    return (srgb_encode(linear) * 255 + 0.5).astype(np.uint8)
+    return (srgb_encode_float(linear) * 255 + 0.5).astype(np.uint8)
 
 
 @pytest.mark.parametrize("detector", chart.DETECTORS)
@@ -91,11 +92,11 @@ def test_saturated_patches_are_dropped_and_counted(truth, chart_linear):
 def test_a_singular_colour_matrix_is_refused_with_the_reason():
     grey = np.repeat(np.linspace(0.05, 0.9, 24)[:, None], 3, axis=1)    # a 'chart' without colour
     with pytest.raises(SingularColourError, match="singular.*span three colour directions"):
-        fit_colour(grey, srgb_encode(grey * [0.9, 1.0, 1.1]), np.ones(24, bool))
+        fit_colour(grey, srgb_encode_float(grey * [0.9, 1.0, 1.1]), np.ones(24, bool))
 
 
 def test_too_few_usable_patches_are_refused():
     usable = np.zeros(24, bool)
     usable[:4] = True
     with pytest.raises(SingularColourError, match="only 4 chart patches"):
-        fit_colour(chart.reference_linear(), srgb_encode(chart.reference_linear()), usable)
+        fit_colour(chart.reference_linear(), srgb_encode_float(chart.reference_linear()), usable)

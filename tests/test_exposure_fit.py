@@ -123,7 +123,7 @@ def test_corrupt_and_unreadable_frames_are_set_aside(captures, tmp_path):
 
 def test_renders_of_the_captured_scenes_fit_the_sensitivity(truth, tmp_path):
     """Auto-exposed frames with linear renders of the same scenes (``--sim``) tie render light to the camera."""
-    from isu_validate.render.exr import write_exr
+    from isu_validate.exr import write_exr
     rng = np.random.default_rng(8)
     for i, light in enumerate((0.02, 0.1, 0.5, 2.0)):
         linear = synthetic.scene(rng, SIZE) * light

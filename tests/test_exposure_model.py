@@ -4,13 +4,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from capture import camera_file
+from capture.camera import CameraFileError, camera_from_dict, load_camera, read_toml, write_imaging
 from capture.camera_model import synthetic
 from capture.camera_model.apply import apply
 from capture.camera_model.model import AutoExposure, ImagingModel, ImagingModelError, Noise, Response, from_dict
-from isu_validate.render import BlenderRenderer, load_camera
-from isu_validate.render.camera import CameraRigError
-from isu_validate.render.outputs import srgb_encode
+from isu_validate.render import BlenderRenderer
+from isu_validate.srgb import srgb_encode
 
 
 def _scene(light=1.0, size=(120, 160)):
@@ -20,7 +19,7 @@ def _scene(light=1.0, size=(120, 160)):
 def test_a_camera_file_without_imaging_tables_has_no_model_and_keeps_its_cache_key():
     rig = load_camera("default")
     assert rig.imaging is None
-    assert camera_file.read_toml(rig.source).imaging is None
+    assert read_toml(rig.source).imaging is None
     plain = BlenderRenderer("draft", rig)
     with_model = BlenderRenderer("draft", _rig_with(synthetic.camera()))
     assert plain.imaging is None and with_model.imaging is not None
@@ -34,13 +33,13 @@ def _rig_with(model: ImagingModel):
 
 def test_the_model_round_trips_through_the_camera_file(tmp_path):
     model = synthetic.camera()
-    out = camera_file.write_imaging(load_camera("default").source, model, tmp_path / "cam.toml")
+    out = write_imaging(load_camera("default").source, model, tmp_path / "cam.toml")
     rig = load_camera(out)
     assert rig.imaging.hash == model.hash
     assert rig.imaging.exposure == model.exposure
     np.testing.assert_allclose(rig.imaging.response.linear, model.response.linear)
     np.testing.assert_allclose(rig.imaging.colour.matrix, model.colour.matrix)
-    assert camera_file.read_toml(out).imaging.hash == model.hash
+    assert read_toml(out).imaging.hash == model.hash
     # intrinsics and pose are kept as they were
     assert (rig.fx, rig.position, rig.rotation) == (load_camera("default").fx, load_camera("default").position,
                                                     load_camera("default").rotation)
@@ -63,8 +62,7 @@ def test_a_broken_imaging_table_names_the_file_and_the_key(table, message):
     with pytest.raises(ImagingModelError, match=message) as err:
         from_dict(raw, "cam.toml")
     assert "cam.toml" in str(err.value)
-    from isu_validate.render import camera_from_dict
-    with pytest.raises(CameraRigError, match=message):
+    with pytest.raises(CameraFileError, match=message):
         camera_from_dict(raw, "cam.toml")
 
 

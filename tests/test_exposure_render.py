@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from capture.camera_model.develop import develop_file
-from isu_validate.render import load_camera, open_renderer
+from capture.camera import load_camera
+from isu_validate.render import open_renderer
 
 pytestmark = pytest.mark.blender
 
@@ -72,7 +73,8 @@ def test_exposure_apply_on_the_linear_render_gives_the_renderers_frame(frames, a
     result = frames["camera", "HIGH"]
     row = develop_file(result.channels["exr"], ae_rig.imaging, tmp_path / "developed.png")
     assert np.array_equal(cv2.imread(str(tmp_path / "developed.png")), cv2.imread(str(result.image)))
-    assert row["exposure"]["exposure_us"] == pytest.approx(_label(result)["imaging"]["exposure"]["exposure_us"], rel=1e-4)
+    assert row["exposure"]["exposure_us"] == pytest.approx(_label(result)["imaging"]["exposure"]["exposure_us"],
+                                                           rel=1e-4)
 
 
 def test_a_cached_render_keeps_what_the_camera_chose(frames):
@@ -85,14 +87,14 @@ def test_a_virtual_chart_renders_where_the_real_one_stood(tmp_path):
     """A chart shown on a board 0.9 m in front of the default camera is the 'real' frame; `exposure chart`
     finds it, solves its pose and renders the virtual chart at the same place."""
     from capture.camera_model import chart, virtual_chart
-    from capture.camera_model.colour_fit import srgb_encode
+    from isu_validate.srgb import srgb_encode_float
     from isu_validate.cli import main
     from isu_validate.render import render_board
 
     rig = load_camera("default")
     _, size = virtual_chart.board_layout(virtual_chart.DEFAULT_PITCH_M)
     texture = tmp_path / "chart.png"
-    cv2.imwrite(str(texture), cv2.cvtColor((srgb_encode(chart.chart_image()) * 255 + 0.5).astype(np.uint8),
+    cv2.imwrite(str(texture), cv2.cvtColor((srgb_encode_float(chart.chart_image()) * 255 + 0.5).astype(np.uint8),
                                            cv2.COLOR_RGB2BGR))
     position = rig.R @ np.array([-size[0] / 2, -size[1] / 2, 0.9]) + rig.t
     render_board(texture, size, (rig.R, position), tmp_path / "real.png", camera=rig, preset="standard")

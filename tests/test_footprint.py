@@ -5,9 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from isu_validate.render import load_camera
-from isu_validate.render.footprint import (NEAR_M, clip_near, facing_camera, fill_parts, fill_triangles, footprints,
+from capture.camera import load_camera
+from isu_validate.render.footprint import (NEAR_M, clip_near, facing_camera, fill_parts, footprints,
                                            is_closed, orientation, pack, project, unpack_counts)
+
+
+def fill_triangles(triangles_px, width, height):
+    """One part's mask: the rasteriser's semantics seen through ``fill_parts``."""
+    return fill_parts([triangles_px], width, height)[0]
+
 
 SQUARE = np.array([[[10, 10], [20, 10], [20, 20]], [[10, 10], [20, 20], [10, 20]]], float)
 
@@ -85,7 +91,8 @@ def test_closed_mesh_orientation_and_culling_keep_the_silhouette():
     # the topology check, cached across frames by the worker, decides alone once given
     assert is_closed(faces) and not is_closed(faces[1:]) and not is_closed(faces[:0])
     assert orientation(v, faces, closed=False) == 0 and orientation(-v, faces, closed=True) == -1
-    R = np.array([[0.8, 0.0, 0.6], [0.0, 1.0, 0.0], [-0.6, 0.0, 0.8]]) @ np.array([[1, 0, 0], [0, 0.8, -0.6], [0, 0.6, 0.8]])
+    R = (np.array([[0.8, 0.0, 0.6], [0.0, 1.0, 0.0], [-0.6, 0.0, 0.8]])
+         @ np.array([[1, 0, 0], [0, 0.8, -0.6], [0, 0.6, 0.8]]))
     tris = (v @ (0.3 * R).T + [0.05, -0.02, 1.2])[faces]               # rotated, scaled, 1.2 m away
     front = facing_camera(tris, 1)
     assert 0 < front.sum() < len(tris)

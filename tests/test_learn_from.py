@@ -3,7 +3,6 @@ first generation; those tests are never run again, and a resumed run learns from
 import json
 import shutil
 
-import numpy as np
 
 from isu_validate.bench.effectiveness.harness import InstantEvaluation, simulate
 from isu_validate.sut.planted import BenchmarkSUT, BlindSpot

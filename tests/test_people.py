@@ -78,7 +78,8 @@ def test_seated_driver_clears_seat_and_wheel_holds_wheel_or_phone_and_wears_the_
         assert m[f"clear_{part}"] >= 0.0, f"{key}: the body cuts {-m[f'clear_{part}'] * 1000:.1f} mm into the {part}"
     assert m["clear_cushion"] < 0.012, f"{key}: floats {m['clear_cushion'] * 1000:.0f} mm above the cushion"
     assert m["clear_wheel_body"] >= 0.0, f"{key}: arm or knee {-m['clear_wheel_body'] * 1000:.1f} mm into the wheel"
-    assert m["clear_wheel_hands"] >= -HAND_TOUCH, f"{key}: a hand {-m['clear_wheel_hands'] * 1000:.1f} mm into the wheel"
+    assert m["clear_wheel_hands"] >= -HAND_TOUCH, \
+        f"{key}: a hand {-m['clear_wheel_hands'] * 1000:.1f} mm into the wheel"
     if key[4] in ("NONE", "P3", "P5", "P6", "P9"):   # at least one hand on the rim (both when no phone)
         assert m["clear_wheel_hands"] < 0.006, f"{key}: no hand touches the wheel"
     if key[4] != "NONE":
@@ -147,7 +148,8 @@ def test_the_cache_is_keyed_reused_and_needs_no_anny_on_a_hit(people, monkeypatc
     cabin["seats"]["driver"]["cushion"][0] += 0.05
     moved = People(cabin, people.store)
     inputs = {"gender": "FEMALE", "height": "H1", "weight": "W1", "emotion": "HAPPY", "phone_position": "NONE"}
-    assert entry_key("driver", {**inputs, "rig": moved.driver_rig}) != entry_key("driver", {**inputs, "rig": people.driver_rig})
+    assert (entry_key("driver", {**inputs, "rig": moved.driver_rig})
+            != entry_key("driver", {**inputs, "rig": people.driver_rig}))
     assert not list(people.store.root.rglob(".tmp-*"))
 
 

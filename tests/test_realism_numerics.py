@@ -164,6 +164,6 @@ def test_bench_tables_report_agreement_below_the_goal(capsys):
     agreement_table(a, b, [2, 53])
     spread_table(a, b, [2, 10], repeats=3, seed=0)
     lines = capsys.readouterr().out.splitlines()
-    rows = [l.split() for l in lines if l.split() and l.split()[0] in ("2", "53")][:2]
+    rows = [line.split() for line in lines if line.split() and line.split()[0] in ("2", "53")][:2]
     assert len(rows) == 2 and all(float(r[3]) < 1e-6 for r in rows)  # rel diff column
-    assert any("n against spread" in l for l in lines)
+    assert any("n against spread" in line for line in lines)

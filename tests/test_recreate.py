@@ -75,7 +75,8 @@ def test_change_costs_count_a_group_once_and_respect_tolerance():
 def test_effort_files_are_checked(tmp_path):
     space = load_space()
     bad = tmp_path / "bad.toml"
-    bad.write_text('[groups.a]\nfeatures = ["seat_belt"]\nminutes = 1\n[groups.b]\nfeatures = ["seat_belt"]\nminutes = 2\n')
+    bad.write_text('[groups.a]\nfeatures = ["seat_belt"]\nminutes = 1\n'
+                   '[groups.b]\nfeatures = ["seat_belt"]\nminutes = 2\n')
     with pytest.raises(EffortError, match="another group"):
         load_effort(bad, space)
     bad.write_text('[groups.a]\nfeatures = ["seat_belt"]\nminutes = -1\n')
@@ -129,7 +130,8 @@ def test_the_things_on_the_co_driver_seat_are_placed_where_the_rig_renders_them(
     assert phone.title == "K1 phone on the co-driver seat" and "screen up" in phone.text
     assert phone.placement.point == tuple(spot["position"]) and phone.placement.angle_deg == spot["rotation_deg"][2]
     assert phone.crop_parts == ("phone_codriver_seat",)
-    assert items["colacan_codriver_seat"].placement.point == tuple(cabin["codriver_seat"]["colacan_codriver_seat"]["position"])
+    assert (items["colacan_codriver_seat"].placement.point
+            == tuple(cabin["codriver_seat"]["colacan_codriver_seat"]["position"]))
     assert items["colabottle_codriver_seat"].placement is None   # NO: nothing to place
 
 
@@ -173,13 +175,16 @@ def test_the_sketch_keeps_every_label_off_the_markers():
              "luggage_position": "BACK", "luggage_colour": "ANTHRACITE", "phone_codriver_seat": "YES",
              "colacan_codriver_seat": "YES", "colabottle_codriver_seat": "YES"}
     svg = top_view(cabin, checklist(space, scene, cabin), camera=(0.6, 0.0))
-    markers = [(float(x), float(y)) for x, y in re.findall(rf'<circle cx="([\d.]+)" cy="([\d.]+)" r="{MARKER_R:g}"', svg)]
-    labels = re.findall(r'<text x="([\d.]+)" y="([\d.]+)" font-size="[\d.]+" text-anchor="(\w+)"[^>]*>([^<]+)</text>', svg)
+    markers = [(float(x), float(y))
+               for x, y in re.findall(rf'<circle cx="([\d.]+)" cy="([\d.]+)" r="{MARKER_R:g}"', svg)]
+    labels = re.findall(r'<text x="([\d.]+)" y="([\d.]+)" font-size="[\d.]+" text-anchor="(\w+)"[^>]*>'
+                        r'([^<]+)</text>', svg)
     assert len(markers) == 4 and {"passenger", "driver", "rear", "origin", "camera", "75°"} <= {t for *_, t in labels}
     for x, y, anchor, text in labels:
         width = CHAR_W * len(text)
         left = float(x) - {"start": 0.0, "middle": width / 2, "end": width}[anchor]
         top, bottom = float(y) - 0.8 * FONT, float(y) + 0.25 * FONT
         for cx, cy in markers:
-            apart = left >= cx + MARKER_R or left + width <= cx - MARKER_R or top >= cy + MARKER_R or bottom <= cy - MARKER_R
+            apart = (left >= cx + MARKER_R or left + width <= cx - MARKER_R
+                     or top >= cy + MARKER_R or bottom <= cy - MARKER_R)
             assert apart, f"{text!r} overlaps the marker at ({cx}, {cy})"

@@ -174,7 +174,8 @@ def test_heads_round_trip_and_single_class_heads(tmp_path):
 def test_captions_vary_in_wording_but_not_in_content():
     p = {"driver_gender": "FEMALE", "driver_emotion": "HAPPY", "tshirt_colour": "BLACK", "seat_belt": "NO",
          "phone_position": "YES", "child_seat": "YES", "child_seat_orientation": "REAR_FACING", "child": "YES",
-         "luggage": "NO", "phone_codriver_seat": "YES", "colabottle_codriver_seat": "NO", "colacan_codriver_seat": "YES"}
+         "luggage": "NO", "phone_codriver_seat": "YES", "colabottle_codriver_seat": "NO",
+         "colacan_codriver_seat": "YES"}
     captions = {describe(p, v) for v in range(40)}
     assert len(captions) > 3
     assert all("rear-facing child seat" in c and "black T-shirt" in c and "mobile phone and a cola can" in c

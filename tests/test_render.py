@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 
 from isu_validate.protocols import RenderError
-from isu_validate.render import Preset, camera_from_dict, load_camera, open_renderer, render_board
+from capture.camera import camera_from_dict, load_camera
+from isu_validate.render import Preset, open_renderer, render_board
 from isu_validate.render.labels import INSTANCE_ID
 from isu_validate.space import SpaceError, load_space
 
@@ -151,7 +152,8 @@ def test_the_default_camera_frames_the_tallest_drivers_head_and_shows_p8(rendere
     wheel for a middle body."""
     height = renderer.render_rig.height
     for gender in ("MALE", "FEMALE"):
-        box = renderer.bounds({**BASE, "driver_gender": gender, "driver_height": "H4", "driver_weight": "W4"})["driver_face"]
+        box = renderer.bounds({**BASE, "driver_gender": gender, "driver_height": "H4",
+                               "driver_weight": "W4"})["driver_face"]
         corners = np.array(np.meshgrid(*zip(*box))).reshape(3, -1).T      # the box's 8 corners
         top = renderer.render_rig.project(corners)[:, 1].min()
         assert top >= -0.02 * height, f"a tall {gender.lower()} driver's head is cut: its top at row {top:.1f}"

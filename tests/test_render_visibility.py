@@ -1,7 +1,8 @@
 """Visibility and unusable frames with real Blender renders at the draft preset.
 
 One cabin rig is built to occlude and to break: a child seat on the back seat in front of the
-suitcase (the front passenger seat moved aside, so that without the child seat nothing hides it), a phone position that holds the phone up before the driver's face, a MEDIUM exterior light
+suitcase (the front passenger seat moved aside, so that without the child seat nothing hides it),
+a phone position that holds the phone up before the driver's face, a MEDIUM exterior light
 of zero (black with the lamps off) and lamps of 10 kW (saturated when on); LOW light stays as shipped,
 the darkest legitimate frame. The footprint is checked against the segmentation itself: the same
 part unoccluded must cover what its footprint says it would."""
@@ -16,13 +17,12 @@ import numpy as np
 import pytest
 import tomli_w
 
-from capture import camera_file
-from capture.camera_file import CameraModel
+from capture.camera import Camera, camera_from_dict, load_camera, write_toml
 from isu_validate.cli import main
 from isu_validate.paths import rigs_dir
 from isu_validate.pipeline import Components, Job, Pipeline, PipelineConfig
 from isu_validate.protocols import RenderError, SUTResponse
-from isu_validate.render import camera_from_dict, load_camera, open_renderer
+from isu_validate.render import open_renderer
 from isu_validate.render.frame_check import BLACK_P99
 from isu_validate.render.labels import INSTANCE_ID
 from isu_validate.space import load_space
@@ -143,7 +143,8 @@ def test_a_run_threshold_changes_what_is_occluded_not_the_pixels(frames, cabin, 
 
 def test_black_and_saturated_frames_are_render_errors_and_the_darkest_real_light_is_not(frames, renderer, tmp_path):
     for name, scene, problem in [("black", {**LIT, "external_light": "MEDIUM"}, "black frame"),
-                                 ("saturated", {**LIT, "external_light": "LOW", "car_lights": "ON"}, "saturated frame")]:
+                                 ("saturated", {**LIT, "external_light": "LOW", "car_lights": "ON"},
+                                  "saturated frame")]:
         with pytest.raises(RenderError, match=problem) as err:
             renderer.render(scene, tmp_path / f"{name}.png")
         assert err.value.image == tmp_path / f"{name}.png" and err.value.image.is_file()   # kept to look at
@@ -211,8 +212,8 @@ def test_the_pipeline_records_render_errors_unasked_and_judges_without_hidden_fe
 
 
 def test_render_takes_the_pose_of_another_rig_for_an_unregistered_camera(tmp_path, capsys):
-    cam = CameraModel("lab-cam", "pinhole", 640, 480, np.array([300.0, 300.0, 319.5, 239.5]))
-    path = camera_file.write_toml(cam, tmp_path / "lab-cam.toml")
+    cam = Camera("lab-cam", "pinhole", 640, 480, np.array([300.0, 300.0, 319.5, 239.5]))
+    path = write_toml(cam, tmp_path / "lab-cam.toml")
     scene = tmp_path / "scene.json"
     scene.write_text(json.dumps(LIT))
     out = tmp_path / "x.png"

@@ -55,7 +55,8 @@ def test_random_errors_stay_improbable_and_systematic_ones_do_not():
                for s, row in zip(scenes, noise)]
     model = ErrorModel(space, np.random.default_rng(4))
     model.observe([space.canonical(s) for s in scenes], targets)
-    probe = [{"a": "YES", "b": "NO", "c": "NO", "d": "YES", "light": "MEDIUM", "angle": angle} for angle in (20.0, 80.0)]
+    probe = [{"a": "YES", "b": "NO", "c": "NO", "d": "YES", "light": "MEDIUM", "angle": angle}
+             for angle in (20.0, 80.0)]
     low, high = model.expected_loss(probe)
     assert low < 0.1 < 0.2 < high  # 5% noise on every feature vs a always wrong above 60 degrees
 

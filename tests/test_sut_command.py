@@ -47,13 +47,6 @@ SCRIPT = textwrap.dedent('''
 ''')
 
 
-@pytest.fixture(autouse=True)
-def only_the_sut_command(monkeypatch):
-    """The real entry point, with only this area's subcommand (others may be mid-build)."""
-    import isu_validate.cli
-    monkeypatch.setattr(isu_validate.cli, "COMMAND_MODULES", ["sut"])
-
-
 @pytest.fixture()
 def space():
     return load_space()
@@ -190,7 +183,8 @@ def test_sut_check_with_scene_judges(program, image, tmp_path, capsys):
     assert main(["sut", "check", "--sut", program, str(image), "--mode", "vc", "--json",
                  "--scene", str(label)]) == 0
     result = json.loads(capsys.readouterr().out)
-    assert result["caption"].startswith("A woman") and "yellow suitcase" in result["verdict"]["details"]["reference_caption"]
+    assert (result["caption"].startswith("A woman")
+            and "yellow suitcase" in result["verdict"]["details"]["reference_caption"])
 
 
 def test_sut_check_reports_errors_and_bad_input(program, image, capsys, monkeypatch):

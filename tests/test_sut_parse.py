@@ -55,7 +55,8 @@ def test_prompt_asks_only_active_features_in_figure_2_style():
     ('Here you go: {"seat_belt": "yes", "child": "Yes"} Hope it helps!', {"seat_belt": "YES", "child": "YES"}),
     ("{'seat_belt': 'YES', 'driver_gender': 'male'}", {"seat_belt": "YES", "driver_gender": "MALE"}),
     ('{"seat_belt": true, "phone_codriver_seat": false}', {"seat_belt": "YES", "phone_codriver_seat": "NO"}),
-    ("{seat_belt: YES, child_seat_orientation: rear-facing,}", {"seat_belt": "YES", "child_seat_orientation": "REAR_FACING"}),
+    ("{seat_belt: YES, child_seat_orientation: rear-facing,}",
+     {"seat_belt": "YES", "child_seat_orientation": "REAR_FACING"}),
     ('{"Seat Belt": "Yes.", "Is the driver male or female?": "Male"}', {"seat_belt": "YES", "driver_gender": "MALE"}),
     ('{"answers": {"seat_belt": "NO"}}', {"seat_belt": "NO"}),
     ('{"seat_belt": {"answer": "YES", "confidence": 0.8}}', {"seat_belt": "YES"}),
@@ -158,7 +159,8 @@ def test_a_run_asks_in_its_prompt_style_and_resumes_in_it(tmp_path):
         config = config_from_args(parser.parse_args(["--sut", "command:true"] + argv))
         parts = build_components(config.pipeline, space)   # the real renderer (not started), SUT and judge
         assert parts.build_request(space, SCENE, "x.png", "vqa", None).prompt.startswith(opening)
-        write_run_file(config.pipeline.run_dir, _run_file_content(config, space, config.identity()))   # run.json, as a run writes it
+        # run.json, as a run writes it
+        write_run_file(config.pipeline.run_dir, _run_file_content(config, space, config.identity()))
     # resuming takes the style from run.json; another one is refused by name
     resumed = config_from_args(parser.parse_args(["--out", str(tmp_path / "b"), "--resume"]))
     assert resumed.pipeline.prompt_style == "compact"

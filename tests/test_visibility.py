@@ -12,14 +12,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from capture import camera_file
-from capture.camera_file import CameraModel
+from capture.camera import Camera, CameraFileError, load_camera, load_render_camera, write_toml
 from isu_validate.archive.export import write_csv
 from isu_validate.cli import main
 from isu_validate.evaluate import make_judge
 from isu_validate.pipeline import PipelineConfig
 from isu_validate.protocols import SUTResponse
-from isu_validate.render import CameraRigError, load_camera, load_render_camera, open_renderer
+from isu_validate.render import open_renderer
 from isu_validate.render.frame_check import BLACK_P99, frame_problem, frame_stats
 from isu_validate.render.visibility import (DEFAULT_MIN_VISIBLE, feature_visibility, min_visible_for, needed_parts,
                                             parse_min_visible, part_shares)
@@ -166,21 +165,21 @@ def test_black_saturated_and_driverless_frames_are_named_with_the_fix():
 @pytest.fixture()
 def unregistered(tmp_path):
     """A calibrated camera file as `isu-validate calibrate` writes it before registration."""
-    cam = CameraModel("lab-cam", "pinhole", 640, 480, np.array([300.0, 300.0, 319.5, 239.5]))
-    return camera_file.write_toml(cam, tmp_path / "lab-cam.toml")
+    cam = Camera("lab-cam", "pinhole", 640, 480, np.array([300.0, 300.0, 319.5, 239.5]))
+    return write_toml(cam, tmp_path / "lab-cam.toml")
 
 
 def test_an_unregistered_pose_is_refused_with_the_fix(unregistered):
     assert not load_camera(unregistered).registered and load_camera("default").registered
     for refuse in (lambda: load_render_camera(unregistered), lambda: open_renderer("draft", unregistered)):
-        with pytest.raises(CameraRigError, match="never registered") as err:
+        with pytest.raises(CameraFileError, match="never registered") as err:
             refuse()
         assert "isu-validate calibrate register" in str(err.value) and "--extrinsics-from" in str(err.value)
     rig = load_render_camera(unregistered, extrinsics_from="default")
     default = load_camera("default")
     assert rig.position == default.position and rig.rotation == default.rotation and rig.fx == 300.0
     assert rig.pose_source == default.source and rig.hash != load_camera(unregistered).hash
-    with pytest.raises(CameraRigError, match="--extrinsics-from rig's pose"):
+    with pytest.raises(CameraFileError, match="--extrinsics-from rig's pose"):
         load_render_camera("default", extrinsics_from=unregistered)
 
 

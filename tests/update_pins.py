@@ -1,8 +1,8 @@
 """Recompute the pinned reference values deliberately and rewrite ``tests/data/pins/*.json``.
 
-    PYTHONPATH=. .venv/bin/python -m tests.update_pins                          # every pin
-    PYTHONPATH=. .venv/bin/python -m tests.update_pins reference_isu            # after retraining the shipped reference ISU
-    PYTHONPATH=. .venv/bin/python -m tests.update_pins reference_isu --render   # ... for a changed scene space
+  PYTHONPATH=. .venv/bin/python -m tests.update_pins                        # every pin
+  PYTHONPATH=. .venv/bin/python -m tests.update_pins reference_isu          # after retraining the shipped reference ISU
+  PYTHONPATH=. .venv/bin/python -m tests.update_pins reference_isu --render # ... for a changed scene space
 
 Prints each value that moves beyond its tolerance as ``old -> new`` before writing, so the
 change can be read and justified in the commit that carries it.  ``--render`` first renders
@@ -60,7 +60,8 @@ def update(name: str) -> None:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m tests.update_pins", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("names", nargs="*", metavar="NAME", help=f"pins to update (default all: {', '.join(pins.PINS)})")
+    parser.add_argument("names", nargs="*", metavar="NAME",
+                        help=f"pins to update (default all: {', '.join(pins.PINS)})")
     parser.add_argument("--render", action="store_true", help="render the reference ISU's test images again first")
     args = parser.parse_args(argv)
     unknown = [n for n in args.names if n not in pins.PINS]

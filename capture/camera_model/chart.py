@@ -12,6 +12,8 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from isu_validate.errors import InputError, UserError
+
 DETECTORS = ("mcc", "ccd")
 PATCHES, COLUMNS, ROWS = 24, 6, 4
 NEUTRALS = slice(18, 24)          # white ... black, the bottom row
@@ -20,7 +22,7 @@ CLIPPED_SHARE = 0.05              # a patch with more than this share of clipped
 HIGH, LOW = 250 / 255, 3 / 255
 
 
-class ChartNotFound(ValueError):
+class ChartNotFound(UserError, ValueError):
     """No ColorChecker 24 in the frame; the message names the file and how to reshoot."""
 
 
@@ -155,7 +157,7 @@ def find(image_rgb8: np.ndarray, detector: str = "auto", where: str = "frame") -
     ``bench exposure``), colour-checker-detection when mcc finds nothing."""
     order = DETECTORS if detector == "auto" else (detector,)
     if detector not in DETECTORS + ("auto",):
-        raise ValueError(f"unknown chart detector {detector!r}; use auto, mcc or ccd")
+        raise InputError(f"unknown chart detector {detector!r}; use auto, mcc or ccd")
     for name in order:
         found = detect(image_rgb8, name)
         if found is not None:

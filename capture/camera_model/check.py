@@ -3,7 +3,9 @@
 Pairs are matched by file stem (``SIM_DIR/x.png`` with ``REAL_DIR/x.png``), or come from a pairs
 directory (``isu_validate.pairs``: each sample's ``sim.png`` with each of its ``real/`` frames). Per pair: the mean,
 median and 5th/95th percentile of display luma (BT.709 weights on the 8-bit levels), their ratio, and
-the CIE dE2000 between the two images' mean colours; pooled and per-pair luma histograms; an HTML page."""
+the CIE dE2000 between the two images' mean colours; pooled and per-pair luma histograms; an HTML page.
+A render folder's by-products (contact sheet, channel images) are left out by the ``by_product`` test the
+command hands in (the renderer's ``outputs.by_product``)."""
 from __future__ import annotations
 
 import base64
@@ -11,10 +13,11 @@ import html
 import io
 import json
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
-from isu_validate.render.outputs import by_product
+from isu_validate.errors import InputError
 
 from .colour_align import read_rgb8
 from .frames import IMAGE_SUFFIXES
@@ -23,15 +26,22 @@ from .metering import LUMA
 BINS = 64
 
 
-def pairs(sim_dir: str | Path, real_dir: str | Path) -> tuple[list[tuple[Path, Path]], list[str]]:
+def _no_by_products(path: Path) -> str | None:
+    return None
+
+
+def pairs(sim_dir: str | Path, real_dir: str | Path,
+          by_product: Callable[[Path], str | None] = _no_by_products) -> tuple[list[tuple[Path, Path]], list[str]]:
+    """(sim, real) images matched by stem; ``by_product(path)`` names a sim file that is not a frame."""
     sim = {p.stem: p for p in sorted(Path(sim_dir).iterdir()) if p.suffix.lower() in IMAGE_SUFFIXES
            and not p.name.startswith(".") and not by_product(p)}   # no contact sheet or channel images
     real = {p.stem: p for p in sorted(Path(real_dir).iterdir()) if p.suffix.lower() in IMAGE_SUFFIXES
             and not p.name.startswith(".")}
     matched = [(sim[k], real[k]) for k in sorted(sim) if k in real]
-    unmatched = [str(sim[k]) for k in sorted(sim) if k not in real] + [str(real[k]) for k in sorted(real) if k not in sim]
+    unmatched = ([str(sim[k]) for k in sorted(sim) if k not in real]
+                 + [str(real[k]) for k in sorted(real) if k not in sim])
     if not matched:
-        raise ValueError(f"no image in {sim_dir} has a namesake in {real_dir}; pairs are matched by file name "
+        raise InputError(f"no image in {sim_dir} has a namesake in {real_dir}; pairs are matched by file name "
                          "(sim/x.png with real/x.png)")
     return matched, unmatched
 
@@ -46,7 +56,7 @@ def pairs_of_directory(root: str | Path) -> tuple[list[tuple[Path, Path]], list[
             unmatched.append(str(sample.path))
         matched += [(sample.sim, frame) for frame in frames if sample.sim.is_file()]
     if not matched:
-        raise ValueError(f"no sample of {root} has both sim.png and captured frames in real/ (capture them with "
+        raise InputError(f"no sample of {root} has both sim.png and captured frames in real/ (capture them with "
                          "`isu-validate capture shoot --pair DIR/<sample>`)")
     return matched, unmatched
 
@@ -58,10 +68,12 @@ def measure(image: np.ndarray) -> dict:
             "mean_colour": (image.reshape(-1, 3).mean(axis=0) / 255.0).tolist()}
 
 
-def compare(sim_dir: str | Path, real_dir: str | Path | None = None) -> dict:
+def compare(sim_dir: str | Path, real_dir: str | Path | None = None,
+            by_product: Callable[[Path], str | None] = _no_by_products) -> dict:
     """Per-pair and pooled brightness and colour; ``real_dir`` None: ``sim_dir`` is a pairs directory."""
     from .colour_fit import de2000
-    matched, unmatched = pairs(sim_dir, real_dir) if real_dir is not None else pairs_of_directory(sim_dir)
+    matched, unmatched = (pairs(sim_dir, real_dir, by_product) if real_dir is not None
+                          else pairs_of_directory(sim_dir))
     rows = []
     for sim_path, real_path in matched:
         s, r = measure(read_rgb8(sim_path)), measure(read_rgb8(real_path))
@@ -69,7 +81,8 @@ def compare(sim_dir: str | Path, real_dir: str | Path | None = None) -> dict:
         rows.append({"name": name, "sim": str(sim_path), "real": str(real_path), "sim_luma": s, "real_luma": r,
                      "luma_ratio": r["mean"] / s["mean"] if s["mean"] > 0 else float("inf"),
                      "luma_difference": r["mean"] - s["mean"],
-                     "de2000_mean_colour": float(de2000(np.array([s["mean_colour"]]), np.array([r["mean_colour"]]))[0])})
+                     "de2000_mean_colour": float(de2000(np.array([s["mean_colour"]]),
+                                                        np.array([r["mean_colour"]]))[0])})
     diffs = np.array([row["luma_difference"] for row in rows])
     des = np.array([row["de2000_mean_colour"] for row in rows])
     summary = {"pairs": len(rows), "unmatched": unmatched, "mean_abs_luma_difference": float(np.abs(diffs).mean()),
@@ -109,7 +122,8 @@ def plots(result: dict) -> list[tuple[str, str]]:
     plt.close(fig)
     n = min(len(rows), 12)
     cols = min(n, 4)
-    fig, axes = plt.subplots((n + cols - 1) // cols, cols, figsize=(3 * cols, 2.3 * ((n + cols - 1) // cols)), squeeze=False)
+    n_rows = (n + cols - 1) // cols
+    fig, axes = plt.subplots(n_rows, cols, figsize=(3 * cols, 2.3 * n_rows), squeeze=False)
     for ax, row in zip(axes.ravel(), rows[:n]):
         for key, label in (("sim_luma", "render"), ("real_luma", "capture")):
             h = np.asarray(row[key]["histogram"], float)
@@ -136,8 +150,9 @@ def write_html(result: dict, path: str | Path) -> Path:
             "<style>body{font-family:sans-serif;margin:2em}td,th{padding:2px 10px;text-align:right}"
             "td:first-child{text-align:left}</style></head><body>"
             f"<h1>Renders against captures</h1><p>{s['pairs']} pairs; mean |luma difference| "
-            f"{s['mean_abs_luma_difference']:.3f} (capture - render {s['mean_luma_difference']:+.3f}); dE2000 of the mean "
-            f"colours: mean {s['mean_de2000_mean_colour']:.2f}, max {s['max_de2000_mean_colour']:.2f}</p>{figures}"
+            f"{s['mean_abs_luma_difference']:.3f} (capture - render {s['mean_luma_difference']:+.3f}); "
+            f"dE2000 of the mean colours: mean {s['mean_de2000_mean_colour']:.2f}, "
+            f"max {s['max_de2000_mean_colour']:.2f}</p>{figures}"
             "<h2>Pairs</h2><table><tr><th>pair</th><th>render luma</th><th>capture luma</th><th>ratio</th>"
             f"<th>dE2000 mean colour</th></tr>{rows}</table>"
             + (f"<h2>Unmatched files</h2><ul>{unmatched}</ul>" if unmatched else "") + "</body></html>")

@@ -10,8 +10,11 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from isu_validate.errors import InputError, InputNotFound
+from isu_validate.srgb import srgb_decode, srgb_encode_float
+
 from . import chart
-from .colour_fit import ColourFit, fit_colour, srgb_decode, srgb_encode
+from .colour_fit import ColourFit, fit_colour
 from .model import Response
 
 
@@ -28,8 +31,8 @@ def read_rgb8(path: str | Path) -> np.ndarray:
     bgr = cv2.imread(str(path), cv2.IMREAD_COLOR)
     if bgr is None:
         if not Path(path).exists():
-            raise FileNotFoundError(f"{path} does not exist")
-        raise ValueError(f"{path} cannot be read as an image (corrupt or not an image)")
+            raise InputNotFound(f"{path} does not exist")
+        raise InputError(f"{path} cannot be read as an image (corrupt or not an image)")
     return cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
 
 
@@ -45,12 +48,12 @@ def read_sim(spec: str | Path, detector: str = "auto") -> ChartReading:
     """A render (PNG: sRGB; EXR: linear, detected on its sRGB encoding) or ``reference``."""
     if str(spec) == "reference":
         ref = chart.reference_linear()
-        return ChartReading("reference", None, chart.Patches(srgb_encode(ref), np.ones(chart.PATCHES, bool)), ref)
+        return ChartReading("reference", None, chart.Patches(srgb_encode_float(ref), np.ones(chart.PATCHES, bool)), ref)
     linear = None
     if str(spec).lower().endswith(".exr"):
         from .develop import read_linear
         linear = read_linear(spec)
-        image = (srgb_encode(linear) * 255.0 + 0.5).astype(np.uint8)
+        image = (srgb_encode_float(linear) * 255.0 + 0.5).astype(np.uint8)
     else:
         image = read_rgb8(spec)
     found = chart.find(image, detector, str(spec))

@@ -12,7 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from isu_validate.render.outputs import srgb_levels, srgb_to_linear
+from isu_validate.errors import UserError
+from isu_validate.srgb import srgb_decode, srgb_encode_float
 
 from .chart import NEUTRALS, PATCHES
 from .model import ColourCorrection, Response
@@ -22,7 +23,7 @@ CANDIDATES = [("Cheung 2004", {"terms": 3}), ("Cheung 2004", {"terms": 5}), ("Ch
 MIN_PATCHES = 6
 
 
-class SingularColourError(ValueError):
+class SingularColourError(UserError, ValueError):
     """The usable patches cannot determine a colour correction."""
 
 
@@ -45,16 +46,6 @@ class ColourFit:
                 "cross_validation_de2000": self.cross_validation}
 
 
-def srgb_decode(v):
-    """Display levels (clipped to 0..1) -> linear light, through ``outputs.srgb_to_linear``."""
-    return srgb_to_linear(np.clip(np.asarray(v, dtype=float), 0.0, 1.0))
-
-
-def srgb_encode(v):
-    """Linear light (clipped to 0..1) -> display levels 0..1 as floats (``outputs.srgb_encode`` gives 8-bit)."""
-    return srgb_levels(np.clip(np.asarray(v, dtype=float), 0.0, 1.0))
-
-
 def de2000(display_a: np.ndarray, display_b: np.ndarray) -> np.ndarray:
     """CIE dE2000 between colours shown as sRGB (output levels 0..1)."""
     import colour
@@ -73,7 +64,7 @@ def fit_colour(sim_linear: np.ndarray, real_levels: np.ndarray, usable: np.ndarr
         raise SingularColourError(f"only {int(usable.sum())} chart patches are usable (at least {MIN_PATCHES} are "
                                   "needed); reshoot the chart evenly lit and not overexposed")
     to_linear = response.to_linear if response is not None else srgb_decode
-    to_output = (lambda x: response.to_output(np.clip(x, 0, 1))) if response is not None else srgb_encode
+    to_output = (lambda x: response.to_output(np.clip(x, 0, 1))) if response is not None else srgb_encode_float
     sim, real_lin = sim_linear[usable], to_linear(real_levels[usable])
     wb, scale = _white_balance(sim_linear, to_linear(real_levels), usable)
     source = sim * wb * scale
@@ -88,10 +79,10 @@ def fit_colour(sim_linear: np.ndarray, real_levels: np.ndarray, usable: np.ndarr
     method, options = next((m, o) for m, o in CANDIDATES if f"{m} {list(o.values())[0]}" == name)
     matrix = _matrix(source, real_lin, method, options)
     after = to_output(_apply(source, matrix, method, options))
-    before_matched = srgb_encode(sim * scale)
+    before_matched = srgb_encode_float(sim * scale)
     correction = ColourCorrection(method, matrix, dict(options))
     return ColourFit(correction, tuple(float(v) for v in wb), float(scale),
-                     stats(de2000(srgb_encode(sim), real)), stats(de2000(after, real)),
+                     stats(de2000(srgb_encode_float(sim), real)), stats(de2000(after, real)),
                      stats(de2000(before_matched, real)), {k: (float(v) if np.isfinite(v) else "singular")
                                                           for k, v in cv.items()})
 

@@ -7,29 +7,32 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 from pathlib import Path
 
 import cv2
 import numpy as np
+
+from isu_validate.archive.run_dir import IMAGES_DIR
+from isu_validate.atomic import atomic_path
+from isu_validate.errors import InputError, InputNotFound
+from isu_validate.exr import read_exr
 
 from .apply import apply
 from .model import ImagingModel
 
 
 def read_linear(path: str | Path) -> np.ndarray:
-    from isu_validate.render.exr import read_exr
     path = Path(path)
     if not path.exists():
-        raise FileNotFoundError(f"{path} does not exist")
+        raise InputNotFound(f"{path} does not exist")
     try:
         passes = read_exr(path)
     except (ValueError, KeyError, IndexError, OSError) as exc:
-        raise ValueError(f"{path}: not a readable linear EXR ({exc})") from None
+        raise InputError(f"{path}: not a readable linear EXR ({exc})") from None
     try:
         return np.dstack([next(v for k, v in passes.items() if k.split(".")[-1] == c) for c in "RGB"])
     except StopIteration:
-        raise ValueError(f"{path}: the EXR has no R, G, B channels (has {', '.join(passes)})") from None
+        raise InputError(f"{path}: the EXR has no R, G, B channels (has {', '.join(passes)})") from None
 
 
 def seed_of(path: Path) -> int:
@@ -40,20 +43,18 @@ def seed_of(path: Path) -> int:
 def develop_file(exr: str | Path, model: ImagingModel, out: str | Path) -> dict:
     exr, out = Path(exr), Path(out)
     image, exposure = apply(read_linear(exr), model, seed=seed_of(exr))
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = out.with_name(f".{out.stem}.tmp.png")
-    if not cv2.imwrite(str(tmp), cv2.cvtColor(image, cv2.COLOR_RGB2BGR)):
-        raise OSError(f"could not write {out}")
-    os.replace(tmp, out)
+    with atomic_path(out, keep_suffix=True) as tmp:
+        if not cv2.imwrite(str(tmp), cv2.cvtColor(image, cv2.COLOR_RGB2BGR)):
+            raise OSError(f"could not write {out}")
     return {"exr": str(exr), "image": str(out), "mean_level": float(image.mean() / 255.0),
             **({"exposure": exposure.to_dict()} if exposure is not None else {})}
 
 
 def run_exrs(run_dir: Path) -> list[Path]:
-    exrs = sorted(p for p in (run_dir / "images").glob("*.exr") if not p.name.startswith("."))
+    exrs = sorted(p for p in (run_dir / IMAGES_DIR).glob("*.exr") if not p.name.startswith("."))
     if not exrs:
-        raise FileNotFoundError(f"{run_dir}/images has no linear EXR renders; run with `--channels exr` (or render "
-                                "with --channels exr) so the linear light is kept")
+        raise InputNotFound(f"{run_dir}/images has no linear EXR renders; run with `--channels exr` (or render "
+                            "with --channels exr) so the linear light is kept")
     return exrs
 
 
@@ -87,7 +88,7 @@ def _claim(out_dir: Path, model: ImagingModel) -> None:
     if stamp.exists():
         had = json.loads(stamp.read_text())
         if had.get("model") != model.hash:
-            raise ValueError(f"{out_dir} holds frames developed with another camera model ({had.get('source')}); "
+            raise InputError(f"{out_dir} holds frames developed with another camera model ({had.get('source')}); "
                              "choose another --out folder")
         return
     stamp.write_text(json.dumps({"model": model.hash, "source": model.source}, indent=1))

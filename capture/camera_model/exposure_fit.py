@@ -49,7 +49,8 @@ def fit_auto_exposure(frames: list[Frame], response: Response, start: AutoExposu
         raise UnderdeterminedError(f"the auto-exposure is underdetermined: the {len(frames)} auto-exposed "
                                    f"frames show a single light level; {LIGHT_ADVICE}")
     base = start or AutoExposure()
-    t_range = tuple(exposure_us) if exposure_us else (min(f.exposure_us for f in frames), max(f.exposure_us for f in frames))
+    t_range = (tuple(exposure_us) if exposure_us
+               else (min(f.exposure_us for f in frames), max(f.exposure_us for f in frames)))
     g_range = tuple(gain) if gain else (min(f.gain for f in frames), max(f.gain for f in frames))
     limits = [_at_limit(f, t_range, g_range) for f in frames]
     choice, levels_by, candidates = _choose_metering(frames, limits, roi, response)
@@ -63,7 +64,8 @@ def fit_auto_exposure(frames: list[Frame], response: Response, start: AutoExposu
                                    f"longest exposure and highest gain)")
     target = float(inside.mean())
     order, order_evidence = _order(frames, limits, t_range, g_range)
-    tolerance = float(max(0.01, np.percentile(np.abs(inside / target - 1.0), 95))) if inside.size > 1 else base.tolerance
+    tolerance = (float(max(0.01, np.percentile(np.abs(inside / target - 1.0), 95))) if inside.size > 1
+                 else base.tolerance)
     speed, speed_fit = _speed(frames, metered, target, tolerance, base.speed)
     kind, options = candidates[choice]
     per_frame = [{"frame": str(f.path), "exposure_us": f.exposure_us, "gain": f.gain, "metered": m,
@@ -123,7 +125,8 @@ def _order(frames, limits, t_range, g_range) -> tuple[str, dict]:
     """Which the camera spends first: a frame with gain above its minimum before the exposure time
     reached its maximum contradicts exposure_first, and the other way round."""
     against_exposure_first = sum(1 for f, lim in zip(frames, limits) if lim is None
-                                 and f.gain > g_range[0] * (1 + AT_LIMIT) and f.exposure_us < t_range[1] * (1 - AT_LIMIT))
+                                 and f.gain > g_range[0] * (1 + AT_LIMIT)
+                                 and f.exposure_us < t_range[1] * (1 - AT_LIMIT))
     against_gain_first = sum(1 for f, lim in zip(frames, limits) if lim is None
                              and f.exposure_us > t_range[0] * (1 + AT_LIMIT) and f.gain < g_range[1] * (1 - AT_LIMIT))
     evidence = {"frames_against_exposure_first": against_exposure_first,

@@ -9,6 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
+from isu_validate.errors import InputError, InputNotFound
+
 from . import frames as frames_mod
 from .apply import auto_expose, forward_curve
 from .metering import meter_frame
@@ -120,14 +122,14 @@ def _sensitivity_from_renders(auto, response, sim_dir: Path) -> tuple[float, str
             continue
         sim = read_linear(exr)
         if sim.shape[:2] != f.image.shape[:2]:
-            raise ValueError(f"{exr} is {sim.shape[1]}x{sim.shape[0]} but {f.path} is "
+            raise InputError(f"{exr} is {sim.shape[1]}x{sim.shape[0]} but {f.path} is "
                              f"{f.image.shape[1]}x{f.image.shape[0]}; render at the camera's resolution")
         ok = (f.image.max(axis=2) < 0.95) & (f.image.min(axis=2) > 0.03)
         real = response.to_linear(f.image)[ok][:, 1].mean() / (f.product * 1e-6)
         ratios.append(real / max(float(sim[ok][:, 1].mean()), 1e-9))
         used.append(exr.name)
     if not ratios:
-        raise FileNotFoundError(f"--sim {sim_dir}: no render named like an auto-exposed frame (<frame stem>.exr)")
+        raise InputNotFound(f"--sim {sim_dir}: no render named like an auto-exposed frame (<frame stem>.exr)")
     return float(np.median(ratios)), f"renders: {len(used)} pairs, spread {float(np.std(np.log(ratios))):.3f} (log)"
 
 

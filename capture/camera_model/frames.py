@@ -12,7 +12,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from isu_validate.pairs import IMAGE_SUFFIXES  # one list of the image files every reader accepts
+from isu_validate.errors import InputError, InputNotFound
+from isu_validate.image_files import IMAGE_SUFFIXES
 BLACK_CODE, WHITE_CODE = 2, 253      # a frame with 99% of its pixels beyond these is all black / saturated
 EXTREME_SHARE = 0.99
 
@@ -61,9 +62,10 @@ def expand(inputs) -> list[tuple[Path, str]]:
         elif p.exists():
             paths.append((p, str(p.parent)))
         else:
-            raise FileNotFoundError(f"frame {p} does not exist")
+            raise InputNotFound(f"frame {p} does not exist")
     if not paths:
-        raise ValueError(f"no frames found in {', '.join(map(str, inputs))} (looked for {', '.join(sorted(IMAGE_SUFFIXES))})")
+        raise InputError(f"no frames found in {', '.join(map(str, inputs))} "
+                         f"(looked for {', '.join(sorted(IMAGE_SUFFIXES))})")
     return paths
 
 
@@ -81,7 +83,8 @@ def load(inputs) -> FrameSet:
 def _load_one(path: Path, group: str) -> tuple[Frame | None, str]:
     sidecar = path.with_suffix(".json")
     if not sidecar.exists():
-        return None, f"no sidecar {sidecar.name} (exposure time and ISO/gain unknown; shoot with `isu-validate capture shoot`)"
+        return None, (f"no sidecar {sidecar.name} (exposure time and ISO/gain unknown; "
+                      "shoot with `isu-validate capture shoot`)")
     try:
         meta = json.loads(sidecar.read_text())
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:

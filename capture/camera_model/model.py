@@ -26,13 +26,16 @@ from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
+from isu_validate.errors import UserError
+from isu_validate.srgb import srgb_to_linear
+
 METERING = ("average", "centre", "roi")
 ORDERS = ("exposure_first", "gain_first")
 SECTIONS = ("exposure", "response", "noise", "colour")
 CODES = 256
 
 
-class ImagingModelError(ValueError):
+class ImagingModelError(UserError, ValueError):
     """An imaging-model table of a camera file is inconsistent; the message names the file and key."""
 
 
@@ -74,7 +77,6 @@ class Response:
 
     @staticmethod
     def srgb(white_balance=(1.0, 1.0, 1.0), fit=None) -> "Response":
-        from isu_validate.render.outputs import srgb_to_linear   # here: outputs imports the rig, which imports this
         lin = srgb_to_linear(np.arange(CODES) / (CODES - 1))
         return Response(np.repeat(lin[:, None], 3, axis=1), tuple(white_balance), fit or {})
 

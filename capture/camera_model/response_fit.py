@@ -12,13 +12,15 @@ from dataclasses import replace
 import numpy as np
 from threadpoolctl import threadpool_limits
 
+from isu_validate.errors import UserError
+
 from .frames import Frame
 from .model import CODES, Response
 
 MIN_EXPOSURES = 2        # distinct exposure products a bracket needs (3 or more recommended)
 
 
-class UnderdeterminedError(ValueError):
+class UnderdeterminedError(UserError, ValueError):
     """The frames cannot determine a part of the model; the message says what to capture."""
 
 
@@ -130,7 +132,8 @@ def bracket_residual(response: Response, frames: list[Frame]) -> dict:
         ok = (a.image < 0.98) & (b.image < 0.98) & (a.image > 0.02) & (b.image > 0.02)
         e = (predicted - b.image)[ok] * 255.0
         errors.append(e)
-        per_frame.append({"from": a.path.name, "to": b.path.name, "rms_codes": float(np.sqrt(np.mean(e ** 2))) if e.size else None})
+        per_frame.append({"from": a.path.name, "to": b.path.name,
+                          "rms_codes": float(np.sqrt(np.mean(e ** 2))) if e.size else None})
     e = np.concatenate(errors) if errors else np.zeros(0)
     return {"rms": float(np.sqrt(np.mean(e ** 2))) if e.size else None,
             "p95": float(np.percentile(np.abs(e), 95)) if e.size else None, "pairs": per_frame}

@@ -6,8 +6,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from isu_validate.errors import InputError, UserError
 
-class CaptureError(RuntimeError):
+
+class CaptureError(UserError, RuntimeError):
     """A camera problem the user can act on; the message names the problem and the fix."""
 
 
@@ -36,11 +38,11 @@ class ExposureRequest:
 
     def __post_init__(self):
         if self.auto and (self.exposure_us is not None or self.iso is not None):
-            raise ValueError("choose either --auto-exposure or --exposure-us/--iso, not both")
+            raise InputError("choose either --auto-exposure or --exposure-us/--iso, not both")
         if self.exposure_us is not None and self.exposure_us <= 0:
-            raise ValueError(f"exposure time must be positive, got {self.exposure_us} us")
+            raise InputError(f"exposure time must be positive, got {self.exposure_us} us")
         if self.iso is not None and self.iso <= 0:
-            raise ValueError(f"ISO must be positive, got {self.iso}")
+            raise InputError(f"ISO must be positive, got {self.iso}")
 
     @property
     def manual(self) -> bool:
@@ -79,7 +81,8 @@ class FrameSource(ABC):
         return False
 
 
-def exposure_mismatch(asked: float | None, got: float | None, what: str, unit: str, tolerance: float = 0.05) -> list[str]:
+def exposure_mismatch(asked: float | None, got: float | None, what: str, unit: str,
+                      tolerance: float = 0.05) -> list[str]:
     """A warning when a read-back value is off by more than ``tolerance`` of what was asked."""
     if asked is None:
         return []

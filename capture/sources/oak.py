@@ -120,7 +120,8 @@ def _not_found_message(device_id) -> str:
     which = f"DepthAI device {device_id}" if device_id else "no DepthAI device"
     return (f"{which} found: check the USB cable (USB3 port, powered hub for OAK-D), and on Linux the udev rule "
             "for vendor 03e7 (echo 'SUBSYSTEM==\"usb\", ATTRS{idVendor}==\"03e7\", MODE=\"0666\"' | "
-            "sudo tee /etc/udev/rules.d/80-movidius.rules; sudo udevadm control --reload-rules && sudo udevadm trigger)")
+            "sudo tee /etc/udev/rules.d/80-movidius.rules; "
+            "sudo udevadm control --reload-rules && sudo udevadm trigger)")
 
 
 def _classify(exc: RuntimeError, device_id: str) -> CaptureError:

@@ -1,11 +1,12 @@
 """A stand-in for a camera where no car is at hand: the pair's scene rendered another way.
 
-Not a photograph. The scene of a pair (``--pair``) is rendered by Blender through another camera
-rig (``rigs/cameras/standin.toml`` unless named), under another sky (a different studio-light
-environment and window light), then given a sensor's gain and noise. It lets the RQ3 workflow
-(capture with the alignment aid, style transfer, ``agree``) run end to end in tests and demos;
-every sidecar says ``"stand_in": true`` and what made the frame. One render per session; each
-frame gets its own noise.
+Not a photograph. The scene of a pair (``--pair``) is rendered through another camera rig
+(``rigs/cameras/standin.toml`` unless named), under another sky (``standin_cabin``: a different
+studio-light environment and window light), then given a sensor's gain and noise. It lets the RQ3
+workflow (capture with the alignment aid, style transfer, ``agree``) run end to end in tests and demos;
+every sidecar says ``"stand_in": true`` and what made the frame. One render per session; each frame
+gets its own noise. The render itself is the command's (``capture shoot``/``align`` build it from the
+renderer and close it): capture never opens Blender.
 """
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ import datetime as _dt
 import shutil
 import tempfile
 from pathlib import Path
+from typing import Callable
 
 import cv2
 import numpy as np
@@ -21,33 +23,41 @@ import numpy as np
 from .base import DeviceNotFound, ExposureRequest, Frame, FrameSource
 
 DEFAULT_RIG = "standin"
+PRESET = "draft"
 ENVIRONMENT = "sunset"        # the default cabin's sky is "courtyard": a different light on everything
 LIGHT_SCALE = 0.7             # window and sky light relative to the cabin rig
 GAIN = 0.9                    # a slightly darker exposure than the render
 NOISE_SIGMA = 5.0             # sensor noise, 8-bit levels
 
 
+# render(rig, out): the pair's scene rendered at PRESET through camera rig ``rig``, in a cabin under
+# ``standin_cabin``'s light, to the PNG ``out`` (its folder also takes Blender's log); returns the image path
+RenderScene = Callable[[str, Path], Path]
+
+
+def standin_cabin(cabin: dict) -> dict:
+    """A copy of the cabin rig ``cabin`` under the stand-in's sky: another environment, dimmer light."""
+    cabin = copy.deepcopy(cabin)
+    light = cabin["lighting"]
+    light["environment"] = ENVIRONMENT
+    for key in ("environment_strength", "window_light_w"):
+        light[key] = {level: value * LIGHT_SCALE for level, value in light[key].items()}
+    return cabin
+
+
 class StandInSource(FrameSource):
-    def __init__(self, target: str, scene: dict | None, space=None, preset: str = "draft", seed: int = 0):
+    def __init__(self, target: str, render: RenderScene | None, seed: int = 0):
         self.rig = target or DEFAULT_RIG
         self.spec = f"standin:{self.rig}"
-        self.scene, self.space, self.preset, self.seed = scene, space, preset, seed
+        self.render, self.preset, self.seed = render, PRESET, seed
         self._image: np.ndarray | None = None
-        self._renderer = None
+        self._tmp: Path | None = None
         self._index = 0
 
     def open(self) -> None:
-        if self.scene is None:
+        if self.render is None:
             raise DeviceNotFound("the stand-in source renders a pair's scene: use it with --pair PAIRS/<sample>")
-        from isu_validate.render import load_cabin, open_renderer
-        cabin = copy.deepcopy(load_cabin("default"))
-        light = cabin["lighting"]
-        light["environment"] = ENVIRONMENT
-        for key in ("environment_strength", "window_light_w"):
-            light[key] = {level: value * LIGHT_SCALE for level, value in light[key].items()}
         self._tmp = Path(tempfile.mkdtemp(prefix="isu-standin-"))
-        self._renderer = open_renderer(self.preset, camera=self.rig, cabin=cabin, log_dir=self._tmp,
-                                       space=self.space)
         self.environment = ENVIRONMENT
 
     def set_exposure(self, request: ExposureRequest) -> list[str]:
@@ -56,8 +66,8 @@ class StandInSource(FrameSource):
 
     def read(self) -> Frame:
         if self._image is None:
-            result = self._renderer.render(self.scene, self._tmp / "standin.png")
-            self._image = cv2.imread(str(result.image), cv2.IMREAD_COLOR)
+            image = self.render(self.rig, self._tmp / "standin.png")
+            self._image = cv2.imread(str(image), cv2.IMREAD_COLOR)
         rng = np.random.default_rng([self.seed, self._index])
         noisy = self._image.astype(np.float32) * GAIN + rng.normal(0.0, NOISE_SIGMA, self._image.shape)
         image = np.clip(np.rint(noisy), 0, 255).astype(np.uint8)
@@ -71,7 +81,6 @@ class StandInSource(FrameSource):
         return Frame(image, meta)
 
     def close(self) -> None:
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
+        if self._tmp is not None:
             shutil.rmtree(self._tmp, ignore_errors=True)
+            self._tmp = None

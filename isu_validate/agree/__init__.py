@@ -1,6 +1,6 @@
 """``agree``: does the SUT behave the same on the real recreation of a scene as on its render?
 
-    result = agree("pairs/", "agree/", AgreeSettings(sut="reference", repeats=3))
+    result = measure_agreement("pairs/", "agree/", AgreeSettings(sut="reference", repeats=3))
 
 Rooms: ``ask`` (the SUT on each image, judged), ``compare`` (categories, agreement, summary),
 ``votes`` (reconstruction validity), ``gap`` (FID/KID), ``report`` (HTML with the heatmap).
@@ -16,17 +16,23 @@ import sys
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-from ..pairs import PairsDir, PairsError, Sample, write_atomic
+from ..atomic import atomic_open, write_text
+from ..pairs import PairsDir, PairsError, Sample
 from ..space import SceneSpace, SpaceError, load_space
 from .ask import Asked, Asker
 from .compare import COMPARED, CSV_COLUMNS, rows_for_frame, summarise
 from .votes import INVALID, tally
+from ..errors import InputError
 
 __all__ = ["AgreeResult", "AgreeSettings", "agree"]
 
 
 @dataclass
 class AgreeSettings:
+    """The SUT ``agree`` asks and how (``isu-validate agree`` flags).
+
+        AgreeSettings(sut="reference", repeats=3, realism=False)
+    """
     sut: str
     repeats: int = 3
     space: str | None = None            # None: the space named in the samples' scene.json
@@ -58,7 +64,14 @@ class AgreeResult:
         return 0 if self.summary["n_features_compared"] else 1
 
 
-def agree(pairs_path: str | os.PathLike, out: str | os.PathLike, settings: AgreeSettings, log=None) -> AgreeResult:
+def measure_agreement(pairs_path: str | os.PathLike, out: str | os.PathLike, settings: AgreeSettings,
+                      log=None) -> AgreeResult:
+    """Ask the SUT about every render and real photo of a pairs directory and compare per feature
+    (``isu-validate agree``): writes ``out/agreement.csv``, ``summary.json``, ``report.html``.
+
+        result = measure_agreement("pairs/", "agree/", AgreeSettings(sut="reference", repeats=3))
+        result.summary["agreement_rate"]
+    """
     log = log or (lambda text: print(f"agree: {text}", file=sys.stderr, flush=True))
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -112,7 +125,7 @@ def _space(samples: list[Sample], name: str | None) -> SceneSpace:
             except PairsError:
                 continue
         if len(names) > 1:
-            raise ValueError(f"the samples come from several scene spaces ({', '.join(sorted(names))}); "
+            raise InputError(f"the samples come from several scene spaces ({', '.join(sorted(names))}); "
                              "pass --space NAME to compare the samples of one")
         name = names.pop() if names else "isu-paper"
     return load_space(name)
@@ -192,13 +205,11 @@ def _realism_headline(realism: dict) -> dict:
 
 
 def _write(out: Path, rows: list[dict], summary: dict) -> None:
-    tmp = out / ".agreement.csv.tmp"
-    with tmp.open("w", newline="") as f:
+    with atomic_open(out / "agreement.csv", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=CSV_COLUMNS)
         writer.writeheader()
         writer.writerows(rows)
-    os.replace(tmp, out / "agreement.csv")
-    write_atomic(out / "summary.json", json.dumps(summary, indent=2) + "\n")
+    write_text(out / "summary.json", json.dumps(summary, indent=2) + "\n")
 
 
 def _write_answers(out: Path, answered: list[SampleAnswers]) -> None:
@@ -210,4 +221,4 @@ def _write_answers(out: Path, answered: list[SampleAnswers]) -> None:
                 "consistency": asked.consistency, "raw": asked.raw}
     data = {a.sample.name: {"sim": one(a.sim), "nst": one(a.nst), "real": {f: one(x) for f, x in a.real.items()}}
             for a in answered}
-    write_atomic(out / "answers.json", json.dumps(data, indent=1) + "\n")
+    write_text(out / "answers.json", json.dumps(data, indent=1) + "\n")

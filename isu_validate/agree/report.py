@@ -140,9 +140,9 @@ def _realism(s: dict) -> str:
     rows, notes = [], []
     for name, v in r.items():
         n = v.get("n_sim", v.get("n_nst"))
-        rows.append({"sets": name.replace("_", " "), "FID": v["fid"], "KID mean": v["kid_mean"], "KID std": v["kid_std"],
-                     "n": f"{n} / {v['n_real']}", "KID subset": v["settings"]["kid_subset_size"],
-                     "subsets": v["settings"]["kid_subsets"]})
+        rows.append({"sets": name.replace("_", " "), "FID": v["fid"], "KID mean": v["kid_mean"],
+                     "KID std": v["kid_std"], "n": f"{n} / {v['n_real']}",
+                     "KID subset": v["settings"]["kid_subset_size"], "subsets": v["settings"]["kid_subsets"]})
         notes += [w for w in v["warnings"] if w not in notes]
     first = next(iter(r.values()))["settings"]
     setting = (f"Inception {first.get('model', '')}, resize {first.get('resize_filter')} to {first.get('input_size')}, "

@@ -13,7 +13,8 @@ def write_review(pairs: PairsDir) -> Path:
         images = [("render (sim.png)", sample.sim)] + [(f"photo {f.name}", f) for f in sample.real_frames()]
         figures = "".join(f'<figure><img src="{esc(path.relative_to(pairs.root))}" alt="{esc(name)}" '
                           f'style="width:420px"><figcaption>{esc(name)}</figcaption></figure>' for name, path in images)
-        votes = ", ".join(f"{a}: {'same' if v else 'not the same'}" for a, v in sample.votes().items()) or "no votes yet"
+        votes = (", ".join(f"{a}: {'same' if v else 'not the same'}" for a, v in sample.votes().items())
+                 or "no votes yet")
         parts.append(section(sample.name, figures, paragraph(votes), anchor=sample.name))
     path = pairs.root / "review.html"
     intro = paragraph("Does each photo show the same scenario as the render (same people, objects, places, "

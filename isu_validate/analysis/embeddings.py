@@ -15,6 +15,8 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from ..errors import InputError
+
 CLIP_SIZE = 224
 CLIP_MEAN = np.array([0.48145466, 0.4578275, 0.40821073])
 CLIP_STD = np.array([0.26862954, 0.26130258, 0.27577711])
@@ -42,7 +44,7 @@ def make_embedder(spec: str, batch_size: int = 8) -> Embedder:
         return _inception(batch_size)
     if spec.startswith("clip:"):
         return _clip(Path(spec[5:]), batch_size)
-    raise ValueError(f"unknown embedding {spec!r}; use inception, scene or clip:PATH "
+    raise InputError(f"unknown embedding {spec!r}; use inception, scene or clip:PATH "
                      "(a TorchScript or torch.export CLIP image encoder)")
 
 
@@ -62,7 +64,7 @@ def _inception(batch_size: int) -> Embedder:
 
 def _clip(path: Path, batch_size: int) -> Embedder:
     if not path.is_file():
-        raise ValueError(f"CLIP weights {path} not found; pass clip:PATH to a TorchScript CLIP image encoder file")
+        raise InputError(f"CLIP weights {path} not found; pass clip:PATH to a TorchScript CLIP image encoder file")
     import torch
 
     from ..realism.images import read_rgb
@@ -96,5 +98,5 @@ def _load_module(path: Path):
             warnings.simplefilter("ignore", FutureWarning)  # torch.jit deprecation notice
             return torch.jit.load(str(path), map_location="cpu").eval()
     except (RuntimeError, ValueError, OSError) as exc:
-        raise ValueError(f"{path} is not a TorchScript module or exported program ({exc}); save the image encoder "
+        raise InputError(f"{path} is not a TorchScript module or exported program ({exc}); save the image encoder "
                          "with torch.jit.save(torch.jit.trace(...)) or torch.export.save") from None

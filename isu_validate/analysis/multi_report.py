@@ -9,17 +9,19 @@ from dataclasses import dataclass
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
+from ..archive import find_runs
+from ..atomic import write_text
 from . import plots
 from .embeddings import Embedder, make_embedder
 from .html import esc, figure, page, paragraph, section, table, threshold_label
 from .rq1 import comparisons, rate_key, rq1_table, run_rates
 from .rq2 import Diversity, measure_diversity
-from .run_report import atomic_write
-from .runs import Run, find_runs, load_run, name_uniquely
+from .runs import Run, load_run, name_uniquely
 from .sections import Part, errors, failure_gallery, feature_analysis, mean_std, regions
 from .tables import write_csv, write_json
 from .thresholds import FAIL_RULES, FAILURE_THRESHOLDS, METRIC_KEYS
 from .timeline import band_by_tests, band_by_time
+from ..errors import InputError
 
 DEFAULT_K = 10
 DEFAULT_GALLERY = 60
@@ -39,7 +41,7 @@ def build_report(run_paths: list, out_dir: Path, settings: ReportSettings | None
     embedder = make_embedder(settings.embedding)  # fail on a bad embedding before reading runs
     runs = name_uniquely([load_run(p) for p in find_runs(run_paths)])
     if not runs:
-        raise ValueError("no runs given; pass one or more run directories")
+        raise InputError("no runs given; pass one or more run directories")
     log(f"report: {len(runs)} runs, {sum(len(r.records) for r in runs)} tests")
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -61,7 +63,7 @@ def build_report(run_paths: list, out_dir: Path, settings: ReportSettings | None
     write_json(out_dir / "report.json", {"settings": meta, "tables": tables})
     html = page("isu-validate report", f"{len(runs)} runs · embedding {embedder.name} · k = {settings.k}",
                 [settings_section(meta)] + [p.html for p in parts])
-    return atomic_write(out_dir / "report.html", html)
+    return write_text(out_dir / "report.html", html)
 
 
 def settings_of(runs: list[Run]) -> dict[tuple[str, str], list[Run]]:
@@ -78,7 +80,7 @@ def check_one_space(runs: list[Run]) -> None:
     first = runs[0]
     for run in runs[1:]:
         if run.space.hash != first.space.hash:
-            raise ValueError(f"runs {first.path} and {run.path} (SUT {run.sut}, {run.mode}) searched different scene "
+            raise InputError(f"runs {first.path} and {run.path} (SUT {run.sut}, {run.mode}) searched different scene "
                              f"spaces ({first.space.name} {first.space.hash} vs {run.space.name} {run.space.hash}); "
                              "report runs of one space together, and the others in a separate report")
 
@@ -136,7 +138,8 @@ def rq1_part(runs: list[Run]) -> Part:
                      for t in thresholds}}
                  for r in rows]
         html.append(f"<h3>{esc(mode.upper())}: failure rate (%) by threshold on {esc(METRIC_KEYS[mode])}</h3>")
-        columns = ["SUT", "algorithm", "runs", "tests", "SUT errors", "occluded"] + [threshold_label(t) for t in thresholds]
+        columns = (["SUT", "algorithm", "runs", "tests", "SUT errors", "occluded"]
+                   + [threshold_label(t) for t in thresholds])
         html.append(table(columns, shown))
         for sut in sorted({r["sut"] for r in rows}):
             series = {r["algorithm"]: ([r[f"{rate_key(t)} mean"] for t in thresholds],

@@ -4,10 +4,9 @@ failure regions, the failing scenes, and SUT errors apart from failures.  No ima
 embeddings here, so it takes seconds."""
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
+from ..atomic import write_text
 from . import plots
 from .html import figure, page, paragraph, section, stat, table, threshold_label
 from .rq1 import rate_key, run_rates
@@ -22,7 +21,7 @@ GALLERY_LIMIT = 48
 def write_run_report(run_dir: Path, gallery_limit: int = GALLERY_LIMIT) -> Path:
     run = load_run(run_dir)
     html = render_run_report(run, gallery_limit)
-    return atomic_write(Path(run_dir) / REPORT_FILE, html)
+    return write_text(Path(run_dir) / REPORT_FILE, html)  # a reader never sees half a report
 
 
 def render_run_report(run: Run, gallery_limit: int = GALLERY_LIMIT) -> str:
@@ -74,20 +73,3 @@ def timeline_section(run: Run) -> str:
     return section("Tests over time", figure(chart, "fitness of each test over time",
                                              "Fitness per test in evaluation order; purple: cumulative failures."),
                    anchor="timeline")
-
-
-def atomic_write(path: Path, text: str) -> Path:
-    """Write via a temporary file and rename, so a reader never sees half a report."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path

@@ -1,22 +1,15 @@
 """A run directory read for analysis: its configuration, scene space and tests in time order."""
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass
 from datetime import datetime
 from functools import cached_property
 from pathlib import Path
 
-from ..archive import TestRecord, read_records
+from ..archive import RunDir, RunDirError, TestRecord, open_run
 from ..space import SceneSpace, SpaceError, load_space, space_from_dict
 from .thresholds import DEFAULT_THRESHOLD, METRIC_KEYS, thresholds_for
-
-RUN_FILE, ARCHIVE_FILE = "run.json", "archive.sqlite"
-
-
-class RunDirError(FileNotFoundError):
-    """A folder that is not a run directory; the message says what to pass instead."""
 
 
 @dataclass
@@ -123,43 +116,35 @@ class Run:
         """The correct answer for each question the test asked."""
         return {q.key: q.truth for q in self.space.questions(record.canonical)}
 
+    @property
+    def directory(self) -> RunDir:
+        """The run's files (labels, images)."""
+        return RunDir(self.path)
+
     def image_path(self, record: TestRecord) -> Path | None:
-        if not record.image:
-            return None
-        path = Path(record.image)
-        path = path if path.is_absolute() else self.path / path
-        return path if path.is_file() else None
+        return self.directory.image_path(record)
 
 
 def load_run(path: str | Path) -> Run:
-    path = Path(path)
-    if not (path / RUN_FILE).is_file():
-        raise RunDirError(f"{path} is not a run directory (no {RUN_FILE}); "
-                          "give a folder that `isu-validate run --out` wrote")
-    info = json.loads((path / RUN_FILE).read_text())
-    records = _read_archive(path)
+    run_dir = open_run(path)
+    info = run_dir.info()
+    records = run_dir.records()   # none for a run that stopped before its first test
     records.sort(key=lambda r: (r.created, r.generation, r.index))
-    return Run(path=path, info=info, space=_space_of(info, path), records=records)
+    return Run(path=run_dir.path, info=info, space=_space_of(info, run_dir), records=records)
 
 
-def _read_archive(path: Path) -> list[TestRecord]:
-    if not (path / ARCHIVE_FILE).is_file():
-        return []  # a run that stopped before its first test
-    return read_records(path / ARCHIVE_FILE)
-
-
-def _space_of(info: dict, path: Path) -> SceneSpace:
+def _space_of(info: dict, run_dir: RunDir) -> SceneSpace:
     """The space as the run recorded it; the named space only if that record is unusable."""
     if isinstance(info.get("space"), dict):
         try:
-            return space_from_dict(info["space"], where=f"{path / RUN_FILE} [space]")
+            return space_from_dict(info["space"], where=f"{run_dir.run_file} [space]")
         except SpaceError:
             pass
     name = info.get("config", {}).get("pipeline", {}).get("space", "isu-paper")
     try:
         return load_space(name)
     except SpaceError as exc:
-        raise RunDirError(f"{path}: cannot rebuild the run's scene space: {exc}") from None
+        raise RunDirError(f"{run_dir.path}: cannot rebuild the run's scene space: {exc}") from None
 
 
 def name_uniquely(runs: list[Run]) -> list[Run]:
@@ -173,19 +158,3 @@ def name_uniquely(runs: list[Run]) -> list[Run]:
     for run, name in zip(runs, names):
         run.name = name
     return runs
-
-
-def find_runs(paths: list[str | Path]) -> list[Path]:
-    """Run directories among ``paths``; a folder of runs stands for every run directly inside it."""
-    found: list[Path] = []
-    for raw in paths:
-        path = Path(raw)
-        if (path / RUN_FILE).is_file():
-            found.append(path)
-        elif path.is_dir() and (inner := sorted(p.parent for p in path.glob(f"*/{RUN_FILE}"))):
-            found.extend(inner)
-        else:
-            raise RunDirError(f"{path} is neither a run directory nor a folder of runs (no {RUN_FILE} in it "
-                              "or its subfolders); give the folders `isu-validate run --out` wrote")
-    unique = list(dict.fromkeys(p.resolve() for p in found))
-    return unique

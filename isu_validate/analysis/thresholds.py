@@ -5,6 +5,8 @@ VQA fails when F_qa < t (1.0 = every answer right); captioning when F_emb <= t.
 """
 from __future__ import annotations
 
+from ..errors import InputError
+
 try:  # the evaluation package owns the oracle; use its thresholds when it is there
     from ..evaluate.oracles import DEFAULT_THRESHOLD as _DEFAULT_THRESHOLD
     from ..evaluate.oracles import FAILURE_THRESHOLDS as _EVALUATE_THRESHOLDS
@@ -26,7 +28,7 @@ FAIL_RULES = {"vqa": "<", "vc": "<="}
 
 def thresholds_for(mode: str) -> tuple[float, ...]:
     if mode not in FAILURE_THRESHOLDS:
-        raise ValueError(f"unknown mode {mode!r} in run.json; expected one of {', '.join(FAILURE_THRESHOLDS)}")
+        raise InputError(f"unknown mode {mode!r} in run.json; expected one of {', '.join(FAILURE_THRESHOLDS)}")
     return FAILURE_THRESHOLDS[mode]
 
 

@@ -6,31 +6,31 @@ showed too little of to be judged (left out of the fitness), separated by ``;``.
 from __future__ import annotations
 
 import csv
-import json
 from pathlib import Path
 from typing import IO
 
-from .store import TestRecord, read_records
+from .run_dir import ARCHIVE_FILE, RunDir, RunDirError
+from .store import TestRecord
 
 BASE_COLUMNS = ["test_id", "algorithm", "seed", "generation"]
 TAIL_COLUMNS = ["f_div", "failed", "occluded", "sut_error", "render_error", "render_s", "sut_s", "image"]
 
 
-def _feature_names(run_dir: Path) -> tuple[list[str], list[str], list[str]]:
+def _feature_names(run_dir: RunDir) -> tuple[list[str], list[str], list[str]]:
     """All features, the predicted ones (the SUT's answers exist only for those), and those with a
     visibility (predicted features that name the render parts showing them)."""
-    features = json.loads((run_dir / "run.json").read_text())["space"]["features"]
+    features = run_dir.info()["space"]["features"]
     predicted = [n for n, f in features.items() if f.get("predicted")]
     return list(features), predicted, [n for n in predicted if features[n].get("visible_parts")]
 
 
 def rows(run_dir: Path) -> tuple[list[str], list[dict]]:
-    run_dir = Path(run_dir)
-    archive_path = run_dir / "archive.sqlite"
-    if not archive_path.exists():
-        raise FileNotFoundError(f"{run_dir} is not a run directory (no archive.sqlite); give the folder `run --out` wrote")
+    run_dir = RunDir(Path(run_dir))
+    if not run_dir.has_archive():
+        raise RunDirError(f"{run_dir.path} is not a run directory (no {ARCHIVE_FILE}); "
+                          "give the folder `run --out` wrote")
     features, predicted, seen = _feature_names(run_dir)
-    records = read_records(archive_path)
+    records = run_dir.records()
     fitness_keys = sorted({k for r in records for k in r.fitness})
     columns = (BASE_COLUMNS + [f"x.{f}" for f in features] + [f"y.{f}" for f in predicted]
                + [f"visible.{f}" for f in seen] + fitness_keys + TAIL_COLUMNS)
@@ -64,3 +64,20 @@ def write_csv(run_dir: Path, out: IO[str]) -> int:
     writer.writeheader()
     writer.writerows(data)
     return len(data)
+
+
+def tests_table(run_dir: str | Path):
+    """A run's tests as a pandas DataFrame: exactly what ``isu-validate export`` writes, read back
+    (empty cells are missing values; answers such as ``NONE`` or ``NA`` stay text).
+
+        tests = tests_table("runs/surrogate-s1")
+        tests[tests.failed == 1][["test_id", "f_qa", "occluded"]]
+    """
+    import io
+
+    import pandas as pd
+
+    text = io.StringIO()
+    write_csv(Path(run_dir), text)
+    text.seek(0)
+    return pd.read_csv(text, keep_default_na=False, na_values=[""])

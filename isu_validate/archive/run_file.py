@@ -8,20 +8,20 @@ and a budget smaller than the stored one (a budget may only grow).
 """
 from __future__ import annotations
 
-import json
 import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-RUN_FILE = "run.json"
-ARCHIVE_FILE = "archive.sqlite"
+from ..atomic import write_json
+from ..errors import UserError
+from .run_dir import ARCHIVE_FILE, RUN_FILE, RunDir, RunDirError  # noqa: F401 (the run's writers name them here)
+
 # budgets that may only grow on --resume: RunConfig field -> what the user calls it
 GROWING_BUDGETS = {"budget_tests": "test budget", "budget_s": "time budget"}
 
 
-class RunError(RuntimeError):
+class RunError(UserError, RuntimeError):
     """A run directory that cannot be started or resumed as asked; the message names the fix."""
 
 
@@ -46,22 +46,16 @@ class ResumeMismatch(RunError):
 
 
 def read_run_file(run_dir: str | os.PathLike) -> dict:
-    path = Path(run_dir) / RUN_FILE
+    """run.json of a run to resume (or learn from); RunError when it cannot be read."""
     try:
-        return json.loads(path.read_text())
-    except ValueError as exc:
-        raise RunError(f"{path} is not valid JSON ({exc}); the run cannot be resumed: start a new one") from None
+        return RunDir(Path(run_dir)).info()
+    except RunDirError as exc:
+        raise RunError(f"{exc}; the run cannot be resumed: start a new one") from None
 
 
 def write_run_file(run_dir: str | os.PathLike, content: dict) -> Path:
     """Atomically: a killed start leaves either no run.json or a whole one."""
-    run_dir = Path(run_dir)
-    run_dir.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=run_dir, prefix=".run-", suffix=".json")
-    with os.fdopen(fd, "w") as fh:
-        json.dump(content, fh, indent=2, default=str)
-    os.replace(tmp, run_dir / RUN_FILE)
-    return run_dir / RUN_FILE
+    return write_json(Path(run_dir) / RUN_FILE, content, indent=2, default=str)
 
 
 def check_run_dir(run_dir: str | os.PathLike, identity: dict, space_hash: str, budgets: dict,

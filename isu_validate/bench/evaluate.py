@@ -7,8 +7,6 @@ from __future__ import annotations
 
 import time
 
-import numpy as np
-
 
 def register_bench(sub) -> None:
     p = sub.add_parser("evaluate", help="judge cost per scene: parsing, VQA, caption metrics by torch threads")
@@ -34,6 +32,8 @@ def _captions(space, scenes) -> list[str]:
 
 
 def cmd_bench_evaluate(args) -> int:
+    import numpy as np
+
     from isu_validate.space import load_space
     from isu_validate.sut import build_request
     from isu_validate.sut.parse import parse_vqa

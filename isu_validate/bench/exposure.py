@@ -11,14 +11,10 @@ import json
 import tempfile
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import numpy as np
-
-from capture.camera_model import chart, synthetic
-from capture.camera_model.apply import apply
-from capture.camera_model.colour_fit import fit_colour, srgb_decode, srgb_encode
-from capture.camera_model.fit import fit_camera
-from capture.camera_model.model import AutoExposure, ColourCorrection, Noise
+if TYPE_CHECKING:   # the imaging model, NumPy, OpenCV and colour load when the bench runs, not for its --help
+    from capture.camera_model.model import ColourCorrection
 
 GOAL = {"target_rel": 0.02, "response_full_scale": 0.01, "de2000_after": 2.0, "apply_ms": 50.0}
 
@@ -36,12 +32,18 @@ def register_bench(sub) -> None:
 def random_camera(seed: int):
     """A camera unlike the others: its own target, metering, trade-off order, tone curve, white balance,
     crosstalk and noise (seed 0 is ``synthetic.camera()``)."""
+    import numpy as np
+
+    from capture.camera_model import synthetic
+    from capture.camera_model.model import AutoExposure, ColourCorrection, Noise
     if seed == 0:
         return synthetic.camera()
     rng = np.random.default_rng(seed)
     metering, sigma = [("centre", 0.25), ("average", 0.25), ("centre", 0.15), ("centre", 0.4)][seed % 4]
-    ae = AutoExposure(target=float(rng.uniform(0.3, 0.55)), exposure_us=(40.0, float(rng.choice([10000, 16600, 33000]))),
-                      gain=(1.0, float(rng.choice([8.0, 16.0]))), order="gain_first" if seed % 3 == 2 else "exposure_first",
+    ae = AutoExposure(target=float(rng.uniform(0.3, 0.55)),
+                      exposure_us=(40.0, float(rng.choice([10000, 16600, 33000]))),
+                      gain=(1.0, float(rng.choice([8.0, 16.0]))),
+                      order="gain_first" if seed % 3 == 2 else "exposure_first",
                       metering=metering, centre_sigma=sigma, sensitivity=float(rng.uniform(300, 1500)))
     wb = tuple(float(v) for v in (rng.uniform(1.0, 1.5), 1.0, rng.uniform(0.6, 1.0)))
     response = synthetic.shoulder_response(rng.uniform(1.8, 2.6), rng.uniform(0.1, 0.5), wb)
@@ -55,6 +57,7 @@ def random_camera(seed: int):
 def response_error(fitted, truth) -> float:
     """Largest output difference over the whole signal range, in shares of full scale, with each channel
     aligned by its best scale (captures cannot tell the curve's scale: it lives in the sensitivity)."""
+    import numpy as np
     s = np.linspace(0, 1, 1001)[:, None].repeat(3, 1)
     true = truth.to_output(s)
     worst = 0.0
@@ -65,6 +68,8 @@ def response_error(fitted, truth) -> float:
 
 
 def fit_case(seed: int, size) -> dict:
+    from capture.camera_model import synthetic
+    from capture.camera_model.fit import fit_camera
     truth = random_camera(seed)
     with tempfile.TemporaryDirectory(prefix="isu-bench-exposure-") as tmp:
         synthetic.capture_set(truth, Path(tmp), seed=seed, light_levels=(0.0002, 0.01, 0.05, 0.2, 0.8, 3.0),
@@ -89,14 +94,22 @@ def fit_case(seed: int, size) -> dict:
 
 def colour_case(truth, response, seed: int, size) -> dict:
     """A ColorChecker frame of the camera against the render's own (sRGB) chart, corrected by the fit."""
+    import numpy as np
+
+    from capture.camera_model import chart, synthetic
+    from capture.camera_model.apply import apply
+    from capture.camera_model.colour_fit import fit_colour
+
+    from ..srgb import srgb_decode, srgb_encode_float
     linear = synthetic.chart_scene(np.random.default_rng(seed + 100), (size[0], size[1]), plain=False)
     real, _ = apply(linear, truth, seed=seed)
-    sim = (srgb_encode(linear) * 255 + 0.5).astype(np.uint8)
+    sim = (srgb_encode_float(linear) * 255 + 0.5).astype(np.uint8)
     t0 = time.perf_counter()
     try:
         found_r, found_s = chart.find(real), chart.find(sim)
     except chart.ChartNotFound:
-        return {"colour_s": time.perf_counter() - t0, "de2000_before": None, "de2000_after": None, "ccm": "chart not found"}
+        return {"colour_s": time.perf_counter() - t0, "de2000_before": None, "de2000_after": None,
+                "ccm": "chart not found"}
     _, rp = chart.oriented(found_r.quads, chart.sample(real / 255.0, found_r.quads), response.to_linear)
     _, sp = chart.oriented(found_s.quads, chart.sample(sim / 255.0, found_s.quads), srgb_decode)
     fit = fit_colour(srgb_decode(sp.colours), rp.colours, rp.usable & sp.usable, response)
@@ -108,6 +121,10 @@ def colour_case(truth, response, seed: int, size) -> dict:
 
 def apply_case(repeats: int = 15) -> dict:
     """Developing a 640x480 linear render: median ms with noise and a linear or a root-polynomial correction."""
+    import numpy as np
+
+    from capture.camera_model import synthetic
+    from capture.camera_model.apply import apply
     linear = synthetic.scene(np.random.default_rng(0), (480, 640)) * 0.4
     out = {}
     for name, colour in (("linear_ccm", synthetic.camera().colour),
@@ -126,7 +143,11 @@ def apply_case(repeats: int = 15) -> dict:
 
 
 def _root_polynomial() -> ColourCorrection:
+    import numpy as np
     from colour.characterisation import matrix_colour_correction
+
+    from capture.camera_model import chart, synthetic
+    from capture.camera_model.model import ColourCorrection
     ref = chart.reference_linear()
     matrix = matrix_colour_correction(ref, ref @ synthetic.CROSSTALK.T, method="Finlayson 2015", degree=2)
     return ColourCorrection("Finlayson 2015", np.asarray(matrix), {"degree": 2})
@@ -134,6 +155,10 @@ def _root_polynomial() -> ColourCorrection:
 
 def detector_case(n: int, seed: int) -> dict:
     """How often each detector finds a randomly placed chart with its patches in place, and how fast."""
+    import numpy as np
+
+    from capture.camera_model import chart, synthetic
+    from capture.camera_model.apply import apply
     rng = np.random.default_rng(seed + 7)
     camera = synthetic.camera()
     frames = []
@@ -155,6 +180,9 @@ def detector_case(n: int, seed: int) -> dict:
 
 def _matches_reference(patches, camera) -> bool:
     """Sampled patches that are the chart's: their linearised colours correlate with the reference."""
+    import numpy as np
+
+    from capture.camera_model import chart
     x = camera.response.to_linear(patches.colours)[patches.usable].ravel()
     y = chart.reference_linear()[patches.usable].ravel()
     return bool(np.corrcoef(x, y)[0, 1] > 0.8)
@@ -191,14 +219,17 @@ def _print(result: dict) -> None:
         print(" ".join(cells) + f"  {'ok' if r['metering_ok'] else 'MISSED'}/{'ok' if r['order_ok'] else 'MISSED'}"
                                 f"  {r['ccm']} ({r.get('detectors', '-')})")
     a = result["apply"]
-    print(f"apply to 640x480 (median of 15): {a['apply_ms_linear_ccm']:.1f} ms wall / {a['apply_cpu_ms_linear_ccm']:.1f} "
-          f"ms CPU with a 3x3 correction, {a['apply_ms_root_polynomial_ccm']:.1f} ms wall / "
+    print(f"apply to 640x480 (median of 15): {a['apply_ms_linear_ccm']:.1f} ms wall / "
+          f"{a['apply_cpu_ms_linear_ccm']:.1f} ms CPU with a 3x3 correction, "
+          f"{a['apply_ms_root_polynomial_ccm']:.1f} ms wall / "
           f"{a['apply_cpu_ms_root_polynomial_ccm']:.1f} ms CPU with a root-polynomial one")
     for name, d in result["detectors"].items():
         print(f"chart detector {name}: found the chart correctly in {d['found_correctly']}/{d['frames']} frames, "
               f"median {d['median_s']:.2f} s per frame")
-    worst = {"target_rel": max(r["target_rel_err"] for r in cases), "response_full_scale": max(r["response_err"] for r in cases),
-             "de2000_after": max((r["de2000_after"] for r in cases if r["de2000_after"] is not None), default=float("inf")),
+    worst = {"target_rel": max(r["target_rel_err"] for r in cases),
+             "response_full_scale": max(r["response_err"] for r in cases),
+             "de2000_after": max((r["de2000_after"] for r in cases if r["de2000_after"] is not None),
+                                 default=float("inf")),
              "apply_ms": a["apply_ms_linear_ccm"]}
     for key, goal in GOAL.items():
         print(f"goal {key} <= {goal:g}: worst {worst[key]:.4g} -> {'met' if worst[key] <= goal else 'NOT met'}")

@@ -11,11 +11,10 @@ import json
 import statistics
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import cv2
-import numpy as np
-
-from isu_validate.render.labels import INSTANCE_ID
+if TYPE_CHECKING:   # numpy, OpenCV and the render labels load when the bench runs, not for its --help
+    import numpy as np
 
 CHANGED = 12   # luma levels: a visible change
 
@@ -31,6 +30,9 @@ def register_bench(sub) -> None:
 
 
 def run(args) -> int:
+    import cv2
+    import numpy as np
+
     from isu_validate.space import load_space
     from isu_validate.render import open_renderer
 
@@ -50,7 +52,8 @@ def run(args) -> int:
                 for emotion in ("HAPPY", "SERIOUS"):
                     out = args.out / f"{preset}-{i}-{emotion.lower()}.png"
                     result = r.render({**scene, "driver_emotion": emotion}, out)
-                    frames[emotion] = (cv2.imread(str(out)), cv2.imread(str(result.channels["seg"]), cv2.IMREAD_UNCHANGED))
+                    frames[emotion] = (cv2.imread(str(out)),
+                                       cv2.imread(str(result.channels["seg"]), cv2.IMREAD_UNCHANGED))
                 m, crop = face_difference(frames["HAPPY"], frames["SERIOUS"])
                 measures.append(m)
                 crops.append(crop)
@@ -68,6 +71,11 @@ def run(args) -> int:
 
 def face_difference(happy: tuple, serious: tuple) -> tuple[dict, np.ndarray]:
     """Measures of one driver's two expressions, and the two face crops side by side (enlarged)."""
+    import cv2
+    import numpy as np
+
+    from isu_validate.render.labels import INSTANCE_ID
+
     (img_h, seg_h), (img_s, seg_s) = happy, serious
     face = (seg_h == INSTANCE_ID["driver_face"]) | (seg_s == INSTANCE_ID["driver_face"])
     if not face.any():
@@ -84,6 +92,9 @@ def face_difference(happy: tuple, serious: tuple) -> tuple[dict, np.ndarray]:
 
 
 def _save_crops(crops: list, path: Path) -> None:
+    import cv2
+    import numpy as np
+
     height = max(c.shape[0] for c in crops)
     padded = [np.pad(c, ((0, height - c.shape[0]), (0, 4), (0, 0))) for c in crops]
     cv2.imwrite(str(path), np.hstack(padded))

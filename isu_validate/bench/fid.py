@@ -14,6 +14,8 @@ import warnings
 
 import numpy as np
 
+from isu_validate.errors import InputError
+
 
 def register_bench(sub) -> None:
     p = sub.add_parser("fid", help="FID/KID: accuracy against a float64 reference, n against spread, speed")
@@ -43,7 +45,8 @@ def synthetic_pools(n: int, dim: int = 2048, rank: int = 64, seed: int = 0) -> t
 def agreement_table(pool_a: np.ndarray, pool_b: np.ndarray, sizes: list[int]) -> None:
     from isu_validate.realism.fid import GramFID, fid_from_stats, stats
     print("1. trace route against the float64 eigenvalue reference (same features)")
-    print(f"{'n':>6} {'FID (fast)':>14} {'FID (eig ref)':>14} {'rel diff':>10} {'fast s':>8} {'ref s':>8}  sqrtm (pytorch-fid)")
+    print(f"{'n':>6} {'FID (fast)':>14} {'FID (eig ref)':>14} {'rel diff':>10} {'fast s':>8} {'ref s':>8}  "
+          "sqrtm (pytorch-fid)")
     for i, n in enumerate(sizes):
         a, b = pool_a[:n], pool_b[:n]
         t0 = time.perf_counter()
@@ -89,7 +92,8 @@ def spread_table(pool_a: np.ndarray, pool_b: np.ndarray, sizes: list[int], repea
             fids.append(fid(a, b))
             kids.append(kid(a, b, subset_size=n, subsets=10, seed=seed).mean)
         per = (time.perf_counter() - start) / repeats
-        print(f"{n:>6} {np.mean(fids):>10.4f} {np.std(fids):>9.4f} {np.mean(kids):>10.5f} {np.std(kids):>9.5f} {per:>14.3f}")
+        print(f"{n:>6} {np.mean(fids):>10.4f} {np.std(fids):>9.4f} {np.mean(kids):>10.5f} {np.std(kids):>9.5f} "
+              f"{per:>14.3f}")
 
 
 def throughput_table(count: int, batch_size: int, seed: int) -> None:
@@ -124,7 +128,7 @@ def _pools(args):
     from isu_validate.realism.features import FeatureExtractor, stderr_progress
     from isu_validate.realism.sets import resolve_set
     if not args.b:
-        raise ValueError("bench fid needs both --a and --b (or neither, for synthetic features)")
+        raise InputError("bench fid needs both --a and --b (or neither, for synthetic features)")
     ex = FeatureExtractor(batch_size=args.batch_size, cache=default_cache_dir())
     pools = tuple(ex.features(resolve_set(s).paths, stderr_progress(s)) for s in (args.a, args.b))
     return pools, f"Inception features of {args.a} and {args.b}"
@@ -147,7 +151,7 @@ def _run(args) -> int:
     (pool_a, pool_b), what = _pools(args)
     sizes = [n for n in _sizes(args) if 2 <= n <= min(len(pool_a), len(pool_b))]
     if not sizes:
-        raise ValueError(f"no subset size fits the pools ({len(pool_a)} and {len(pool_b)} images); lower --sizes")
+        raise InputError(f"no subset size fits the pools ({len(pool_a)} and {len(pool_b)} images); lower --sizes")
     print(f"bench fid: {what}; seed {args.seed}")
     agreement_table(pool_a, pool_b, sizes)
     spread_table(pool_a, pool_b, sizes, args.repeats, args.seed)

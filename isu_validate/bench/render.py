@@ -11,9 +11,10 @@ import sys
 import time
 from dataclasses import replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import cv2
-import numpy as np
+if TYPE_CHECKING:   # numpy and OpenCV load when the bench runs, not for its --help
+    import numpy as np
 
 
 def register_bench(sub) -> None:
@@ -37,6 +38,8 @@ def register_bench(sub) -> None:
 
 
 def run(args) -> int:
+    import numpy as np
+
     from isu_validate.space import load_space
     from isu_validate.render import get_preset
 
@@ -67,6 +70,8 @@ def run(args) -> int:
 def _references(scenes, reference, args, space) -> list[np.ndarray]:
     """Reference frames, reused from ``--out`` when rendered before with the same rigs, renderer
     version and reference settings (the file name carries the render cache key)."""
+    import cv2
+
     from isu_validate.render import open_renderer
     with open_renderer(reference, args.rig, log_dir=args.out / "logs", timeout_s=3600) as r:
         paths = [args.out / f"reference-{r.cache_key(space.canonical(s))[:16]}.png" for s in scenes]
@@ -82,6 +87,8 @@ def _references(scenes, reference, args, space) -> list[np.ndarray]:
 
 
 def _bench_preset(preset, scenes, refs, args, space, people: bool = True) -> dict:
+    import cv2
+    import numpy as np
     from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
     from isu_validate.render import open_renderer
@@ -150,5 +157,6 @@ def _print_row(row: dict) -> None:
         cost = s["median"] - bare["s_per_frame"]["median"]
         cpu = row["median_parts_s"]["worker_cpu_s"] - bare["median_parts_s"]["worker_cpu_s"]
         print(f"{'':>9} without people: s/frame median {bare['s_per_frame']['median']:.2f}; the people cost "
-              f"{cost:+.2f} s/frame ({cpu:+.2f} worker CPU s; posing on the host {row['median_parts_s']['people_s']:.3f} s)",
+              f"{cost:+.2f} s/frame ({cpu:+.2f} worker CPU s; "
+              f"posing on the host {row['median_parts_s']['people_s']:.3f} s)",
               flush=True)

@@ -12,16 +12,7 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
-
-from isu_validate.archive import Archive, TestRecord
-from isu_validate.space import load_space
 from isu_validate.search.algorithm_names import ALGORITHMS, algorithms_option
-from isu_validate.search.algorithms import make_algorithm
-from isu_validate.search.diversity import DiversityTracker
-from isu_validate.search.loop import _objectives
-from isu_validate.bench.effectiveness.harness import InstantEvaluation
-from isu_validate.sut.planted import make_benchmark_sut
 
 WINDOW = 200  # tests per timing window
 
@@ -55,6 +46,16 @@ class Window:
 
 
 def measure(space_name: str, algorithm: str, pop_size: int, seed: int, sizes: list[int], folder: Path) -> list[dict]:
+    import numpy as np
+
+    from isu_validate.archive import Archive, TestRecord
+    from isu_validate.bench.effectiveness.harness import InstantEvaluation
+    from isu_validate.search.algorithms import make_algorithm
+    from isu_validate.search.diversity import DiversityTracker
+    from isu_validate.search.loop import _objectives
+    from isu_validate.space import load_space
+    from isu_validate.sut.planted import make_benchmark_sut
+
     space = load_space(space_name)
     evaluate = InstantEvaluation(space, make_benchmark_sut("blind-spots", space))
     search = make_algorithm(algorithm, space, pop_size, seed)
@@ -103,12 +104,14 @@ def cmd_bench_search(args) -> int:
             total = time.perf_counter() - start
         print(f"search overhead ({algorithm}, pop {args.pop_size}, space {args.space}; "
               f"archive commits durable: SQLite WAL, synchronous=FULL)")
-        print(f"{'archive size':>12}  {'ms/test':>8}  {'search':>7}  {'commit':>7}  {'CPU':>6}  overhead  goal (ms/test)")
+        print(f"{'archive size':>12}  {'ms/test':>8}  {'search':>7}  {'commit':>7}  {'CPU':>6}  "
+              "overhead  goal (ms/test)")
         for r in results:
             overhead = r["search_ms_per_test"] + r["commit_ms_per_test"]
             verdict = "ok" if overhead < 5 else "over"
             print(f"{r['size']:>12}  {r['ms_per_test']:>8.2f}  {r['search_ms_per_test']:>7.2f}  "
-                  f"{r['commit_ms_per_test']:>7.2f}  {r['cpu_ms_per_test']:>6.2f}  {overhead:>8.2f}  < 5 ms ({verdict})")
+                  f"{r['commit_ms_per_test']:>7.2f}  {r['cpu_ms_per_test']:>6.2f}  {overhead:>8.2f}  "
+                  f"< 5 ms ({verdict})")
         print("  search: ask + diversity + tell; commit: the durable archive write; overhead: search + commit,\n"
               "  what the search adds to a test (the goal); ms/test: the whole loop, including the benchmark\n"
               "  SUT's in-memory answers and judging, which a real run replaces by a render and a SUT call;\n"

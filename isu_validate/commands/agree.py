@@ -14,6 +14,8 @@ import os
 import sys
 from pathlib import Path
 
+from ..errors import InputError
+
 
 def register(sub) -> None:
     p = sub.add_parser("agree", help="per-feature sim/real agreement report (or: agree votes, validity votes)",
@@ -41,12 +43,12 @@ def run(args) -> int:
     if args.target[0] == "votes":
         return _votes(args)
     if len(args.target) != 1 or not args.sut or not args.out:
-        raise ValueError("usage: isu-validate agree PAIRS --sut SPEC --out DIR (see --help)")
-    from ..agree import AgreeSettings, agree
+        raise InputError("usage: isu-validate agree PAIRS --sut SPEC --out DIR (see --help)")
+    from ..agree import AgreeSettings, measure_agreement
     settings = AgreeSettings(sut=args.sut, repeats=args.repeats, space=args.space,
                              include_invalid=args.include_invalid, realism=not args.no_realism,
                              threads=args.threads, feature_cache=args.feature_cache, sut_timeout_s=args.sut_timeout)
-    result = agree(args.target[0], args.out, settings)
+    result = measure_agreement(args.target[0], args.out, settings)
     s = result.summary
     if args.json:
         print(json.dumps(s, indent=2))
@@ -74,7 +76,8 @@ def _lines(s: dict, out: Path) -> str:
                      f"{s['nst_change']['rows']} rows compared both ways")
     for key, name in (("", "sim"), ("_nst", "nst")):
         if s.get(f"fid{key}") is not None:
-            lines.append(f"FID {name}/real {s[f'fid{key}']:.2f}, KID {s[f'kid_mean{key}']:.4f} ± {s[f'kid_std{key}']:.4f}")
+            lines.append(f"FID {name}/real {s[f'fid{key}']:.2f}, "
+                         f"KID {s[f'kid_mean{key}']:.4f} ± {s[f'kid_std{key}']:.4f}")
     if s["validity"]["rate"] is not None:
         lines.append(f"reconstruction validity: {_pct(s['validity']['rate'])} ({s['validity']['valid']} valid, "
                      f"{s['validity']['invalid']} invalid, {s['validity']['tied']} tied)")
@@ -88,14 +91,14 @@ def _votes(args) -> int:
     from ..agree.votes import parse_answer, tally
     from ..pairs import PairsDir
     if len(args.target) != 2 or not args.annotator:
-        raise ValueError("usage: isu-validate agree votes PAIRS --annotator NAME [--vote SAMPLE=yes|no ...]")
+        raise InputError("usage: isu-validate agree votes PAIRS --annotator NAME [--vote SAMPLE=yes|no ...]")
     pairs = PairsDir(args.target[1])
     if args.vote:
         for item in args.vote:
             name, _, answer = item.partition("=")
             same = parse_answer(answer)
             if same is None:
-                raise ValueError(f"--vote {item!r}: write SAMPLE=yes or SAMPLE=no")
+                raise InputError(f"--vote {item!r}: write SAMPLE=yes or SAMPLE=no")
             pairs.sample(name).record_vote(args.annotator, same)
     else:
         _ask_votes(pairs, args.annotator, args.redo)

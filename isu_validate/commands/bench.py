@@ -16,7 +16,7 @@ BENCHES = {
     "faces": "driver's face: size in pixels and HAPPY/SERIOUS difference per preset",
     "calib": "calibration: solve time, intrinsics error, uncertainty, cross-validation",
     "search": "search overhead per test at growing archive sizes",
-    "effectiveness": "failure rates of search algorithms on SUTs with planted blind spots",
+    "effectiveness": "failure rates of each search algorithm against random search",
     "evaluate": "judge cost per scene: parsing, VQA, caption metrics by torch threads",
     "fid": "FID/KID: accuracy against a float64 reference, n against spread, speed",
     "nst": "style transfer: Gatys steps against loss and time; fast-model throughput",

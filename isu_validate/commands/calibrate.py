@@ -11,21 +11,24 @@ import json
 import sys
 from pathlib import Path
 
+from ..errors import InputError, InputNotFound
+from ..image_files import IMAGE_SUFFIXES
+
 EPILOG = """forms:
   calibrate IMAGES... --board SPEC --model M --out CAMERA.toml   calibrate (IMAGES: files or folders)
   calibrate diff A.toml B.toml                                    projection difference of two calibrations
   calibrate register CAMERA.toml IMAGE --markers FILE             camera pose in the cabin from ArUco markers
 example: isu-validate calibrate shots/ --board charuco:11x8:0.030:0.022:DICT_5X5_100 --model opencv8 --out cam.toml
 """
-IMAGE_SUFFIXES = {".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff"}
 
 
 def register(sub) -> None:
+    from capture.lens_models import MODELS as LENS_MODELS   # the one list of lens models (loads no OpenCV)
     p = sub.add_parser("calibrate", help="calibrate a camera from ChArUco images (also: diff, register)",
                        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("inputs", nargs="+", metavar="IMAGES", help="images or folders; or 'diff A B' / 'register CAM IMG'")
     p.add_argument("--board", help="charuco:COLSxROWS:SQUARE_M:MARKER_M:DICT")
-    p.add_argument("--model", default="opencv8", choices=["pinhole", "opencv8", "fisheye"])
+    p.add_argument("--model", default="opencv8", choices=LENS_MODELS)
     p.add_argument("--out", help="camera file to write (TOML)")
     p.add_argument("--name", help="camera name in the file (default: the output file's stem)")
     p.add_argument("--json", action="store_true", help="print the camera file's content as one JSON object")
@@ -62,16 +65,16 @@ def _expand(inputs) -> list[Path]:
         else:
             paths.append(p)
     if not paths:
-        raise ValueError(f"no images found in {', '.join(inputs)} (looked for {', '.join(sorted(IMAGE_SUFFIXES))})")
+        raise InputError(f"no images found in {', '.join(inputs)} (looked for {', '.join(sorted(IMAGE_SUFFIXES))})")
     return paths
 
 
 def _calibrate(args) -> int:
-    from capture import camera_file
     from capture.board import BoardSpec
     from capture.calibrate import calibrate, detect_images
+    from capture.camera import to_json, write_toml
     if not args.board or not args.out:
-        raise ValueError("calibrate needs --board SPEC and --out CAMERA.toml (see --help)")
+        raise InputError("calibrate needs --board SPEC and --out CAMERA.toml (see --help)")
     spec = BoardSpec.parse(args.board)
     paths = _expand(args.inputs)
 
@@ -95,15 +98,16 @@ def _calibrate(args) -> int:
     elif not cam.registered:
         res.warnings.append("camera pose not registered: [extrinsics] is a placeholder (origin, looking forward); "
                             "run 'calibrate register' with cabin markers or pass --extrinsics-from RIG")
-    camera_file.write_toml(cam, args.out)
+    write_toml(cam, args.out)
     if args.cameramodel:
-        camera_file.write_cameramodel(cam, args.cameramodel)
+        from capture.mrcal_file import write_cameramodel
+        write_cameramodel(cam, args.cameramodel)
     if args.report:
         from capture.report import write_report
         res.camera = cam
         write_report(res, args.report)
     if args.json:
-        print(camera_file.to_json(cam))
+        print(to_json(cam))
     else:
         _print_summary(cam, res, args)
     return 0
@@ -127,9 +131,10 @@ def _print_summary(cam, res, args) -> None:
 def _with_pose_from(cam, rig_path):
     from dataclasses import replace
 
-    from isu_validate.render.camera import load_camera
+    from capture.camera import load_camera, require_registered
     rig = load_camera(rig_path)
-    return replace(cam, position=tuple(rig.position), rotation=tuple(rig.rotation), registered=True,
+    require_registered(rig, "the --extrinsics-from rig")   # a placeholder pose copied would pass as measured
+    return replace(cam, position=rig.position, rotation=rig.rotation, registered=True,
                    registration={"copied_from": str(rig.source)})
 
 
@@ -139,26 +144,26 @@ def _registered(cam, image_path, markers_path):
     from capture.registration import load_markers, register
     from isu_validate.paths import resolve_rig
     if not markers_path:
-        raise ValueError("registration needs --markers FILE (marker ids and their corners in the cabin; "
+        raise InputError("registration needs --markers FILE (marker ids and their corners in the cabin; "
                          "start from the shipped example rigs/markers/example.toml)")
     markers_path = resolve_rig("markers", markers_path)  # a file, or the name of a shipped one
     img = cv2.imread(str(image_path), cv2.IMREAD_GRAYSCALE)
     if img is None:
-        raise FileNotFoundError(f"cannot read registration image {image_path}")
+        raise InputNotFound(f"cannot read registration image {image_path}")
     dictionary, markers = load_markers(markers_path)
     return register(cam, img, dictionary, markers, str(image_path))
 
 
 def _register(args) -> int:
-    from capture import camera_file
+    from capture.camera import read_toml, to_json, write_toml
     if len(args.inputs) != 3:
-        raise ValueError("usage: calibrate register CAMERA.toml IMAGE --markers FILE [--out NEW.toml]")
-    cam = camera_file.read_toml(args.inputs[1])
+        raise InputError("usage: calibrate register CAMERA.toml IMAGE --markers FILE [--out NEW.toml]")
+    cam = read_toml(args.inputs[1])
     cam = _registered(cam, args.inputs[2], args.markers)
     out = args.out or args.inputs[1]
-    camera_file.write_toml(cam, out)
+    write_toml(cam, out)
     if args.json:
-        print(camera_file.to_json(cam))
+        print(to_json(cam))
     else:
         reg = cam.registration
         print(f"camera at {[round(float(v), 4) for v in cam.position]} m in the cabin; markers {reg['markers']}, "
@@ -169,13 +174,13 @@ def _register(args) -> int:
 
 
 def _diff(args) -> int:
-    from capture import camera_file
+    from capture.camera import read_toml
     from capture.projection_diff import projection_diff
     if len(args.inputs) != 3:
-        raise ValueError("usage: calibrate diff A.toml B.toml")
-    a, b = (camera_file.read_toml(p) for p in args.inputs[1:])
+        raise InputError("usage: calibrate diff A.toml B.toml")
+    a, b = (read_toml(p) for p in args.inputs[1:])
     if a.size != b.size:
-        raise ValueError(f"the two cameras have different image sizes ({a.width}x{a.height} vs {b.width}x{b.height}); "
+        raise InputError(f"the two cameras have different image sizes ({a.width}x{a.height} vs {b.width}x{b.height}); "
                          "a projection diff compares one sensor mode")
     d = projection_diff(a.model, a.intrinsics, b.model, b.intrinsics, a.size, fit=not args.no_fit,
                         distance_m=args.distance)
@@ -186,6 +191,7 @@ def _diff(args) -> int:
         print(json.dumps(out, indent=2))
     else:
         s = out["diff_px"]
-        print(f"projection diff {args.inputs[1]} vs {args.inputs[2]} at {args.distance:g} m: median {s['median']:.3f} px, "
-              f"p90 {s['p90']:.3f} px, max {s['max']:.3f} px (fitted rotation {d.rotation_deg:.4f} deg)")
+        print(f"projection diff {args.inputs[1]} vs {args.inputs[2]} at {args.distance:g} m: "
+              f"median {s['median']:.3f} px, p90 {s['p90']:.3f} px, max {s['max']:.3f} px "
+              f"(fitted rotation {d.rotation_deg:.4f} deg)")
     return 0

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import sys
+from contextlib import ExitStack
 
 SOURCE_HELP = ("v4l2:/dev/videoN[@WxH], depthai[:MXID][@WxH], replay:DIR|VIDEO (a recorded session), or "
                "standin[:RIG] (no camera: the pair's scene rendered another way, marked as a stand-in)")
@@ -63,13 +64,11 @@ def run_list(args) -> int:
 def run_shoot(args) -> int:
     from capture.session import shoot
     from capture.sources import CaptureError, ExposureRequest
+    from isu_validate.errors import InputError
     request = ExposureRequest(args.exposure_us, args.iso, args.auto_exposure)
     if (args.out is None) == (args.pair is None):
-        raise ValueError("give --out DIR (a session folder) or --pair PAIRS/<sample>, one of the two")
+        raise InputError("give --out DIR (a session folder) or --pair PAIRS/<sample>, one of the two")
     sample = _pair(args.pair) if args.pair else None
-    source = _source(args.source, sample)
-    out, first, annotate = (sample.real_dir, sample.next_frame_index(), _aligner(sample)) if sample else (
-        args.out, None, None)
 
     def progress(i, n, meta):
         exp = meta.get("exposure_us")
@@ -77,10 +76,14 @@ def run_shoot(args) -> int:
         print(f"\rframe {i}/{n}" + (f" exposure {exp:.0f} us" if exp else ""), end=end, file=sys.stderr)
 
     try:
-        session = shoot(source, args.frames, out, request, progress, first, annotate)
-    except CaptureError as exc:
-        print(file=sys.stderr)
-        raise ValueError(str(exc)) from None  # the CLI prints ValueErrors as one clear line
+        with ExitStack() as renders:
+            source = _source(args.source, sample, renders)
+            out, first, annotate = (sample.real_dir, sample.next_frame_index(), _aligner(sample)) if sample else (
+                args.out, None, None)
+            session = shoot(source, args.frames, out, request, progress, first, annotate)
+    except CaptureError:
+        print(file=sys.stderr)  # end the progress line; the CLI prints the CaptureError (a UserError) as one line
+        raise
     print(file=sys.stderr)
     for w in session.warnings:
         print(f"warning: {w}", file=sys.stderr)
@@ -93,23 +96,39 @@ def run_shoot(args) -> int:
 
 
 def _pair(path):
+    from isu_validate.errors import InputError
     from isu_validate.pairs import PairsDir
     sample = PairsDir(__import__("pathlib").Path(path).parent).sample(path)
     if not sample.sim.is_file():
-        raise ValueError(f"{sample.path} has no sim.png to align against; is it a sample written by "
+        raise InputError(f"{sample.path} has no sim.png to align against; is it a sample written by "
                          "`isu-validate recreate`?")
     return sample
 
 
-def _source(spec: str, sample):
-    """The frame source; a stand-in renders the pair's scene in the pair's space."""
+def _source(spec: str, sample, renders: ExitStack):
+    """The frame source; a stand-in renders the pair's scene (its renderer closes with ``renders``)."""
     from capture.sources import open_source, parse_spec
+    from isu_validate.errors import InputError
     if parse_spec(spec)[0] != "standin":
         return open_source(spec)
     if sample is None:
-        raise ValueError("the standin source renders a pair's scene: add --pair PAIRS/<sample>")
+        raise InputError("the standin source renders a pair's scene: add --pair PAIRS/<sample>")
+    return open_source(spec, render=_standin_render(sample, renders))
+
+
+def _standin_render(sample, renders: ExitStack):
+    """The stand-in's render (``capture.sources.standin.RenderScene``): the pair's scene in the pair's space,
+    through the stand-in's rig under its light. Blender starts on the first frame, stops with ``renders``."""
+    from capture.sources.standin import PRESET, standin_cabin
+    from isu_validate.render import load_cabin, open_renderer
     from isu_validate.space import load_space
-    return open_source(spec, scene=sample.scene(), space=load_space(sample.label().get("space", "isu-paper")))
+    scene, space = sample.scene(), load_space(sample.label().get("space", "isu-paper"))
+
+    def render(rig, out):
+        renderer = renders.enter_context(open_renderer(PRESET, camera=rig, cabin=standin_cabin(load_cabin("default")),
+                                                       log_dir=out.parent, space=space))
+        return renderer.render(scene, out).image
+    return render
 
 
 def _aligner(sample):
@@ -131,21 +150,17 @@ def _aligner(sample):
 def run_align(args) -> int:
     """Frames from the source against the pair's render until enough: the aid goes to align/live.png."""
     from capture.alignment import align, read_bgr
-    from capture.sources import CaptureError
     import cv2
     sample = _pair(args.pair)
     render = read_bgr(sample.sim)
     live = sample.align_dir / "live.png"
     live.parent.mkdir(parents=True, exist_ok=True)
-    try:
-        with _source(args.source, sample) as source:
-            n = 0
-            while not args.frames or n < args.frames:
-                result, image = align(render, source.read().image)
-                cv2.imwrite(str(live), image)
-                n += 1
-                print(f"frame {n}: {result.line()}", flush=True)
-    except CaptureError as exc:
-        raise ValueError(str(exc)) from None
+    with ExitStack() as renders, _source(args.source, sample, renders) as source:  # a CaptureError is a UserError
+        n = 0
+        while not args.frames or n < args.frames:
+            result, image = align(render, source.read().image)
+            cv2.imwrite(str(live), image)
+            n += 1
+            print(f"frame {n}: {result.line()}", flush=True)
     print(f"aid image: {live} (refreshed each frame)", file=sys.stderr)
     return 0

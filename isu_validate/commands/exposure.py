@@ -33,8 +33,9 @@ def register(sub) -> None:
                                                                           "(default: the widest seen)")
     fit.add_argument("--gain", type=_range, metavar="MIN:MAX", help="gain limits (ISO/100) from the datasheet")
     fit.add_argument("--roi", type=_roi, metavar="X0,Y0,X1,Y1", help="a cabin metering region (fractions) to test")
-    fit.add_argument("--sim", type=Path, metavar="DIR", help="linear renders <frame stem>.exr of the captured scenes "
-                                                            "(fits the sensitivity that links render light to the camera)")
+    fit.add_argument("--sim", type=Path, metavar="DIR",
+                     help="linear renders <frame stem>.exr of the captured scenes "
+                          "(fits the sensitivity that links render light to the camera)")
     fit.add_argument("--plot", type=Path, help="measured against predicted exposure and brightness (PNG)")
     fit.add_argument("--json", action="store_true", help="print the fit summary as JSON")
     fit.set_defaults(func=_fit)
@@ -95,14 +96,14 @@ def _roi(text: str) -> tuple[float, ...]:
 
 
 def _model_of(camera: str):
+    from capture.camera import load_camera
     from capture.camera_model.model import ImagingModel
-    from isu_validate.render.camera import load_camera
     rig = load_camera(camera)
     return rig.imaging or ImagingModel(source=str(rig.source)), rig
 
 
 def _fit(args) -> int:
-    from capture.camera_file import write_imaging
+    from capture.camera import write_imaging
     from capture.camera_model.fit import fit_camera, plot_predictions
     base, rig = _model_of(args.camera)
     result = fit_camera(args.frames, base, args.exposure_us, args.gain, args.roi, args.sim)
@@ -140,9 +141,10 @@ def _print_fit(summary: dict, args) -> None:
 
 def _apply(args) -> int:
     from capture.camera_model.develop import develop_file, develop_run
+    from isu_validate.errors import InputError
     model, rig = _model_of(args.camera)
     if model.empty:
-        raise ValueError(f"{args.camera} has no imaging model ([exposure]/[response]/[noise]/[colour]); fit one "
+        raise InputError(f"{args.camera} has no imaging model ([exposure]/[response]/[noise]/[colour]); fit one "
                          "with `isu-validate exposure fit`")
     if args.target.is_dir():
         out = args.out or args.target / f"camera-{rig.name}"
@@ -167,7 +169,8 @@ def _apply(args) -> int:
 
 
 def _chart(args) -> int:
-    from capture.camera_model.virtual_chart import DEFAULT_PITCH_M, render_virtual_chart
+    from capture.camera_model.virtual_chart import DEFAULT_PITCH_M
+    from isu_validate.render.virtual_chart import render_virtual_chart
     info = render_virtual_chart(args.real, args.camera, args.out, args.preset, args.pitch or DEFAULT_PITCH_M,
                                 args.detector)
     print(f"virtual chart rendered to {args.out} (chart found by {info['detector']}, board at "
@@ -176,11 +179,12 @@ def _chart(args) -> int:
 
 
 def _colour(args) -> int:
-    from capture.camera_file import write_imaging
+    from capture.camera import write_imaging
     from capture.camera_model.colour_align import align, read_real, read_sim
+    from isu_validate.errors import InputError
     model, rig = _model_of(args.camera) if args.camera else (None, None)
     if args.camera_out and not args.camera:
-        raise ValueError("--camera-out needs --camera (the camera file to extend)")
+        raise InputError("--camera-out needs --camera (the camera file to extend)")
     response = model.response if model is not None else None
     fit, report = align(read_real(args.real, response, args.detector), read_sim(args.sim, args.detector), response)
     args.out.parent.mkdir(parents=True, exist_ok=True)
@@ -208,7 +212,8 @@ def _colour(args) -> int:
 
 def _check(args) -> int:
     from capture.camera_model.check import compare, write_html, write_json
-    result = compare(args.sim_dir, args.real_dir)
+    from isu_validate.render.outputs import by_product
+    result = compare(args.sim_dir, args.real_dir, by_product)
     args.out.mkdir(parents=True, exist_ok=True)
     write_json(result, args.out / "check.json")
     page = write_html(result, args.out / "report.html")

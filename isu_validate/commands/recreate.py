@@ -28,8 +28,8 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from ..recreate import recreate
-    plan = recreate(args.runs, args.select, args.n, args.seed, args.out, args.failing_share, args.effort,
+    from ..recreate import plan_recreation
+    plan = plan_recreation(args.runs, args.select, args.n, args.seed, args.out, args.failing_share, args.effort,
                     args.cabin)
     if args.json:
         print(json.dumps({"out": str(plan.out), "samples": plan.samples, "minutes": plan.minutes,

@@ -4,6 +4,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from ..errors import InputError
+
 
 def register(sub) -> None:
     parser = sub.add_parser("reference", help="the embedded reference ISU (train it)")
@@ -35,7 +37,7 @@ def cmd_train(args) -> int:
     from ..space import load_space
 
     if args.n < 10 or args.held_out < 1:
-        raise ValueError("use at least --n 10 training scenes and --held-out 1")
+        raise InputError("use at least --n 10 training scenes and --held-out 1")
     space = load_space(args.space)
     out = args.out or args.workdir / "model"  # never the shipped model unless asked for by name
     checks = dict(parse_check(spec, args.held_out) for spec in args.check_preset)
@@ -66,7 +68,7 @@ def parse_check(spec: str, held_out: int) -> tuple[str, int]:
     try:
         n = int(count) if count else held_out
     except ValueError:
-        raise ValueError(f"--check-preset {spec!r}: N must be a whole number (PRESET[:N])") from None
+        raise InputError(f"--check-preset {spec!r}: N must be a whole number (PRESET[:N])") from None
     if not 1 <= n <= held_out:
-        raise ValueError(f"--check-preset {spec!r}: N must be between 1 and --held-out ({held_out})")
+        raise InputError(f"--check-preset {spec!r}: N must be between 1 and --held-out ({held_out})")
     return name, n

@@ -5,7 +5,7 @@ import json
 import sys
 from pathlib import Path
 
-import numpy as np
+from ..errors import InputNotFound, UserError
 
 
 def register(sub) -> None:
@@ -38,7 +38,8 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from ..cli import UserError
+    import numpy as np
+
     from ..protocols import RenderError
     from ..render import open_renderer
     from ..render.visibility import parse_min_visible
@@ -49,9 +50,12 @@ def run(args) -> int:
     space = load_space(args.space)
     if args.random is not None:
         folder = args.out
-        scenes = [(f"scene-{i:04d}", s) for i, s in enumerate(space.sample(np.random.default_rng(args.seed), args.random))]
+        scenes = [(f"scene-{i:04d}", s)
+                  for i, s in enumerate(space.sample(np.random.default_rng(args.seed), args.random))]
         targets = [(folder / f"{name}.png", scene) for name, scene in scenes]
     else:
+        if not args.scene.is_file():
+            raise InputNotFound(f"scene file {args.scene} does not exist")
         try:
             scene = json.loads(args.scene.read_text())
         except json.JSONDecodeError as exc:
@@ -79,11 +83,11 @@ def run(args) -> int:
             print(f"[{k}/{len(targets)}] {out}  update {t['update_s']:.3f}s render {t['render_s']:.2f}s "
                   f"write {t['write_s']:.2f}s total {t['total_s']:.2f}s{' (cached)' if result.cached else ''}"
                   f"{hidden}", file=sys.stderr)
-    if args.random is not None:
+    frames = [out for out, _ in targets if out.exists()]
+    if args.random is not None and frames:   # no sheet when no frame was written (each failure is listed above)
         from ..render.contact import contact_sheet
         from ..render.outputs import CONTACT_SHEET
-        sheet = contact_sheet([out for out, _ in targets if out.exists()], folder / CONTACT_SHEET,
-                              tile_width=args.sheet_tile)
+        sheet = contact_sheet(frames, folder / CONTACT_SHEET, tile_width=args.sheet_tile)
         print(f"contact sheet: {sheet}", file=sys.stderr)
     print(f"Blender log: {log_dir}", file=sys.stderr)
     if unusable:

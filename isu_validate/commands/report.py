@@ -24,15 +24,9 @@ def register(sub) -> None:
 
 
 def cmd_report(args) -> int:
-    from ..analysis.multi_report import DEFAULT_GALLERY, DEFAULT_K, ReportSettings, build_report
+    from ..analysis import report
 
-    k = DEFAULT_K if args.clusters is None else args.clusters
-    gallery = DEFAULT_GALLERY if args.gallery is None else args.gallery
-    if k < 1:
-        raise ValueError(f"--clusters must be at least 1, got {k}")
-    if gallery < 0:
-        raise ValueError(f"--gallery must be 0 or more, got {gallery}")
-    settings = ReportSettings(embedding=args.embedding, k=k, seed=args.seed, gallery=gallery)
-    path = build_report(args.runs, args.out, settings)
+    path = report(args.runs, args.out, embedding=args.embedding, clusters=args.clusters, gallery=args.gallery,
+                  seed=args.seed)
     print(f"report: {path}")
     return 0

@@ -12,14 +12,11 @@ import sys
 from dataclasses import fields
 from pathlib import Path
 
-from ..archive.run_file import RUN_FILE, ResumeMismatch, read_run_file
-from ..execution import render_threads
-from ..pipeline import PipelineConfig
+from ..archive.run_file import RUN_FILE, ResumeMismatch, RunError, read_run_file
+from ..config import DEFAULT_MIN_VISIBLE, PipelineConfig, RunConfig
+from ..search.algorithm_names import ALGORITHMS, algorithm_option
 from ..sut.prompt import PROMPT_STYLES
-from ..render.visibility import DEFAULT_MIN_VISIBLE, parse_min_visible
 from .sut import parse_options
-from ..search import ALGORITHMS, RunConfig, RunError, SUTErrorsStop, run_search
-from ..search.algorithm_names import algorithm_option
 
 _PIPELINE, _RUN = PipelineConfig(run_dir=""), RunConfig(pipeline=PipelineConfig(run_dir=""))
 DEFAULT_BUDGET = _RUN.budget_tests
@@ -37,7 +34,7 @@ SETTINGS = {
     "cluster": ("run", "cluster"), "stop_after_sut_errors": ("run", "stop_after_sut_errors"),
     "learn_from": ("run", "learn_from"),
 }
-EPILOG = f"""API keys come from the environment only, never from a flag or a file, and are never
+EPILOG = """API keys come from the environment only, never from a flag or a file, and are never
 written to run.json, the archive, logs or reports:
   openai:MODEL@URL   the key is read from $OPENAI_API_KEY, or from the variable named by
                      --sut-option api_key_env=NAME (a local server without a key needs none)
@@ -75,13 +72,16 @@ def add_run_options(p) -> None:
                                  "API keys: see below)")
     p.add_argument("--mode", choices=["vqa", "vc"], help=f"visual question answering or captioning (default {d.mode})")
     p.add_argument("--space", help=f"scene space: shipped name or TOML path (default {d.space})")
-    p.add_argument("--algorithm", type=algorithm_option, metavar="|".join(ALGORITHMS), help=f"search algorithm (default {r.algorithm}): surrogate (surrogate-assisted, learns "
-                        "where the SUT errs), nsga2 (the paper's NSGA-II, for replication), rs (random search, the baseline)")
+    p.add_argument("--algorithm", type=algorithm_option, metavar="|".join(ALGORITHMS),
+                   help=f"search algorithm (default {r.algorithm}): surrogate (surrogate-assisted, learns "
+                        "where the SUT errs), nsga2 (the paper's NSGA-II, for replication), "
+                        "rs (random search, the baseline)")
     p.add_argument("--pop-size", type=int, help=f"population size (default {r.pop_size})")
     p.add_argument("--learn-from", nargs="+", metavar="RUN",
                    help="earlier runs of the same SUT, mode and space the surrogate learns from before its first "
                         "generation (their tests are not run again and do not count in the budget)")
-    p.add_argument("--budget", type=int, help=f"number of tests (default {DEFAULT_BUDGET}; with --resume: extend the budget)")
+    p.add_argument("--budget", type=int,
+                   help=f"number of tests (default {DEFAULT_BUDGET}; with --resume: extend the budget)")
     p.add_argument("--budget-time", type=float, help="wall-clock budget in seconds (instead of, or with, --budget)")
     p.add_argument("--seed", type=int, help=f"random seed of the search (default {r.seed})")
     p.add_argument("--threshold", type=float,
@@ -97,7 +97,8 @@ def add_run_options(p) -> None:
     p.add_argument("--repeats", type=int, help=f"ask each scene K times, majority vote (default {d.repeats})")
     p.add_argument("--preset", help=f"render preset: draft | standard | final (default {d.preset})")
     p.add_argument("--camera", help=f"camera rig: shipped name or TOML path (default {d.camera}); with an imaging "
-                                    "model from `isu-validate exposure`, renders are developed the way that camera would")
+                                    "model from `isu-validate exposure`, renders are developed the way that "
+                                    "camera would")
     p.add_argument("--extrinsics-from", metavar="RIG",
                    help="take the camera's pose in the cabin from this registered rig (for a calibrated camera "
                         "file whose pose was never registered); recorded in run.json")
@@ -121,6 +122,8 @@ def add_run_options(p) -> None:
 
 def given_settings(args) -> dict[str, dict]:
     """The options the user typed, as config values: {"run": {field: value}, "pipeline": {...}}."""
+    from ..render.visibility import parse_min_visible
+
     out: dict[str, dict] = {"run": {}, "pipeline": {}}
     for dest, (part, field) in SETTINGS.items():
         value = getattr(args, dest, None)
@@ -139,6 +142,8 @@ def given_settings(args) -> dict[str, dict]:
 
 
 def config_from_args(args) -> RunConfig:
+    from ..execution import render_threads
+
     given = given_settings(args)
     run, pipeline = given["run"], given["pipeline"]
     if "budget_s" in run and "budget_tests" not in run:
@@ -190,6 +195,8 @@ def _known(cls, values: dict) -> dict:
 
 
 def cmd_run(args) -> int:
+    from ..search import SUTErrorsStop, run_search
+
     config = config_from_args(args)
     try:
         summary = run_search(config, resume=args.resume)

@@ -13,7 +13,9 @@ import time
 import zlib
 from pathlib import Path
 
-from isu_validate.realism.images import IMAGE_SUFFIXES
+from isu_validate.errors import InputError, InputNotFound
+from isu_validate.image_files import IMAGE_SUFFIXES
+from isu_validate.pairs import PairsDir
 
 
 def register(sub) -> None:
@@ -32,9 +34,11 @@ def register(sub) -> None:
     p.add_argument("--threads", type=int, default=min(4, os.cpu_count() or 1))
     p.add_argument("--seed", type=int, default=0)
     g = p.add_argument_group("gatys")
-    g.add_argument("--size", type=int, default=192, help="longer side optimised (default 192; output keeps the input size)")
+    g.add_argument("--size", type=int, default=192,
+                   help="longer side optimised (default 192; output keeps the input size)")
     g.add_argument("--style-size", type=int, default=None)
-    g.add_argument("--steps", type=int, default=None, help="gatys iterations (default 40) or training steps (default 300)")
+    g.add_argument("--steps", type=int, default=None,
+                   help="gatys iterations (default 40) or training steps (default 300)")
     g.add_argument("--optimizer", choices=("lbfgs", "adam"), default="lbfgs")
     g.add_argument("--lr", type=float, default=None, help="Adam learning rate (gatys 0.02, train 1e-3)")
     g.add_argument("--content-layers", default="relu4_2")
@@ -81,14 +85,14 @@ def run(args) -> int:
         print(f"stylize: {i}/{len(jobs)} {dst} ({records[-1]['seconds']:.1f} s, "
               f"SSIM-luma {records[-1]['ssim_luma']:.3f})", file=sys.stderr)
     if not records:
-        raise ValueError(f"none of the {len(jobs)} input image(s) could be read; see the messages above")
+        raise InputError(f"none of the {len(jobs)} input image(s) could be read; see the messages above")
     summary = _summary(records, stylise.settings)
     if skipped:
         summary["skipped"] = skipped
         print(f"stylize: skipped {len(skipped)} unreadable image(s), listed in the report", file=sys.stderr)
     if args.pairs and args.sut:
         summary["answer_flips"] = _flips(args)
-    report = (args.pairs / "nst.json") if args.pairs else (args.out / "stylize.json")
+    report = PairsDir(args.pairs).nst_report if args.pairs else (args.out / "stylize.json")
     report.write_text(json.dumps(summary, indent=2) + "\n")
     print(json.dumps({k: v for k, v in summary.items() if k != "images"}, indent=2))
     return 0
@@ -101,31 +105,30 @@ def _expand(items: list[str]) -> list[Path]:
         if p.is_dir():
             found = sorted(q for q in p.iterdir() if q.suffix.lower() in IMAGE_SUFFIXES)
             if not found:
-                raise ValueError(f"folder {p} holds no images ({', '.join(IMAGE_SUFFIXES)})")
+                raise InputError(f"folder {p} holds no images ({', '.join(IMAGE_SUFFIXES)})")
             paths += found
         elif p.is_file():
             paths.append(p)
         else:
-            raise FileNotFoundError(f"image {p} does not exist")
+            raise InputNotFound(f"image {p} does not exist")
     return paths
 
 
 def _jobs(args) -> list[tuple[Path, Path]]:
     if args.pairs:
         if args.images:
-            raise ValueError("give either IMAGES with --out or --pairs DIR, not both")
-        from isu_validate.pairs import PairsDir
+            raise InputError("give either IMAGES with --out or --pairs DIR, not both")
         samples = [s for s in PairsDir(args.pairs).samples() if s.sim.is_file()]
         if not samples:
-            raise ValueError(f"pairs directory {args.pairs} has no sim images to stylise")
+            raise InputError(f"pairs directory {args.pairs} has no sim images to stylise")
         return [(s.sim, s.nst) for s in samples]
     if not args.images or not args.out:
-        raise ValueError("stylize needs IMAGES and --out DIR (or --pairs DIR); see isu-validate stylize --help")
+        raise InputError("stylize needs IMAGES and --out DIR (or --pairs DIR); see isu-validate stylize --help")
     sources = _expand(args.images)
     stems = [p.stem for p in sources]
     clash = sorted({s for s in stems if stems.count(s) > 1})
     if clash:
-        raise ValueError(f"several inputs share the name(s) {', '.join(clash)}; their outputs would overwrite "
+        raise InputError(f"several inputs share the name(s) {', '.join(clash)}; their outputs would overwrite "
                          "each other in --out: stylise those folders separately")
     args.out.mkdir(parents=True, exist_ok=True)
     return [(p, args.out / f"{p.stem}.png") for p in sources]
@@ -153,7 +156,7 @@ def _gatys_stylist(args):
     from style_transfer import VGG19, stylize_gatys
     from style_transfer.imageio import load_image, save_image
     if not args.style:
-        raise ValueError("the gatys method needs --style REAL.png")
+        raise InputError("the gatys method needs --style REAL.png")
     cfg = _gatys_config(args)
     cfg.check()
     vgg = VGG19(cfg.pooling)
@@ -176,12 +179,12 @@ def _fast_stylist(args):
     from style_transfer import load_model, stylize_fast
     from style_transfer.imageio import load_image, save_image
     if not args.model:
-        raise ValueError("the fast method needs --model MODEL (train one with `isu-validate stylize train`)")
+        raise InputError("the fast method needs --model MODEL (train one with `isu-validate stylize train`)")
     net, meta = load_model(args.model)
     if args.style:
         import hashlib
         if hashlib.sha256(args.style.read_bytes()).hexdigest() != meta.get("style_sha256"):
-            raise ValueError(f"model {args.model} was trained for style {meta.get('style')}, not {args.style}; "
+            raise InputError(f"model {args.model} was trained for style {meta.get('style')}, not {args.style}; "
                              "train a model for this style or drop --style")
 
     def stylise(src: Path, dst: Path) -> dict:
@@ -219,7 +222,6 @@ def _flips(args) -> dict:
     from style_transfer.preservation import answer_flips
     space = load_space(args.space)
     sut = open_sut(args.sut, space=space)
-    from isu_validate.pairs import PairsDir
     # the scene comes out of the run's label (scene.json) through the one pairs reader
     samples = [(s.scene(), s.sim, s.nst) for s in PairsDir(args.pairs).samples()
                if s.scene_file.is_file() and s.sim.is_file() and s.nst.is_file()]
@@ -235,7 +237,7 @@ def _flips(args) -> dict:
 def _train(args) -> int:
     from style_transfer import FastNetConfig, FastTrainConfig, train_fast
     if len(args.images) != 1 or not (args.style and args.content and args.out):
-        raise ValueError("usage: isu-validate stylize train --style REAL.png --content RENDERS/ --out MODEL")
+        raise InputError("usage: isu-validate stylize train --style REAL.png --content RENDERS/ --out MODEL")
     net = FastNetConfig(args.width, args.blocks, noise=not args.no_noise)
     cfg = FastTrainConfig(net=net, steps=args.steps or 300,
                           batch_size=args.batch_size, crop=args.crop, content_weight=args.content_weight,

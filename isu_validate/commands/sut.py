@@ -14,11 +14,13 @@ import json
 import re
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from ..protocols import SUTRequest
-from ..space import Question, load_space
+from ..errors import InputError, InputNotFound
 from ..sut.prompt import DEFAULT_PROMPT_STYLE, PROMPT_STYLES
+
+if TYPE_CHECKING:
+    from ..space import Question
 
 EPILOG = """adapter options (--sut-option NAME=VALUE):
   openai:   api_key_env (default OPENAI_API_KEY), auth=bearer|api-key, api_version (Azure),
@@ -37,13 +39,15 @@ def register(sub) -> None:
     check = sut_sub.add_parser("check", help="ask a SUT once about an image; print answers, problems, latency",
                                epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     check.add_argument("image", type=Path, help="image file (PNG or JPEG)")
-    check.add_argument("--sut", required=True, help="reference | openai:MODEL@BASE_URL | command:PROGRAM ARGS... | http:URL")
+    check.add_argument("--sut", required=True,
+                       help="reference | openai:MODEL@BASE_URL | command:PROGRAM ARGS... | http:URL")
     check.add_argument("--mode", choices=("vqa", "vc"), default="vqa", help="questions (vqa) or captioning (vc)")
     check.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     check.add_argument("--scene", type=Path, help="scene JSON (or a run's labels/<test>.json): ask its active "
                                                   "features and judge the answer")
     check.add_argument("--space", default="isu-paper", help="scene space name or TOML file (default: %(default)s)")
-    check.add_argument("--prompt", help="replace the captioning prompt, or the VQA rules ({questions} places the questions)")
+    check.add_argument("--prompt",
+                       help="replace the captioning prompt, or the VQA rules ({questions} places the questions)")
     check.add_argument("--prompt-style", choices=sorted(PROMPT_STYLES), default=DEFAULT_PROMPT_STYLE,
                        help="wording of the VQA prompt: paper (the paper's Figure 2, default) or compact (earlier)")
     check.add_argument("--repeats", type=int, default=1, help="ask K times, majority vote per feature")
@@ -60,40 +64,46 @@ def parse_options(pairs: list[str]) -> dict[str, str]:
     for pair in pairs:
         name, sep, value = pair.partition("=")
         if not sep or not name.strip():
-            raise ValueError(f"--sut-option {pair!r} must read NAME=VALUE")
+            raise InputError(f"--sut-option {pair!r} must read NAME=VALUE")
         options[name.strip()] = value
     return options
 
 
 def load_scene(path: Path) -> dict[str, Any]:
+    if not path.is_file():
+        raise InputNotFound(f"scene file {path} does not exist")
     try:
         data = json.loads(path.read_text())
     except ValueError as exc:
-        raise ValueError(f"{path}: not valid JSON ({exc})") from None
+        raise InputError(f"{path}: not valid JSON ({exc})") from None
     scene = data.get("scene", data) if isinstance(data, dict) else None
     if not isinstance(scene, dict):
-        raise ValueError(f"{path}: expected a scene object (feature -> value) or a label file with a 'scene' key")
+        raise InputError(f"{path}: expected a scene object (feature -> value) or a label file with a 'scene' key")
     return scene
 
 
 def all_questions(space) -> tuple[Question, ...]:
     """Every predicted feature, for a check without a scene (truth unknown)."""
+    from ..space import Question
+
     return tuple(Question(f.name, f.question, f.options, f.weight, "") for f in space.predicted)
 
 
 def _check_image(path: Path) -> None:
     if path.is_dir():
-        from ..realism.images import IMAGE_SUFFIXES
+        from ..image_files import IMAGE_SUFFIXES
 
         example = next((p for p in sorted(path.iterdir()) if p.suffix.lower() in IMAGE_SUFFIXES), None)
         hint = f", e.g. {example}" if example else ""
-        raise ValueError(f"{path} is a folder; sut check asks about one image: give an image file{hint}")
+        raise InputError(f"{path} is a folder; sut check asks about one image: give an image file{hint}")
     if not path.is_file():
-        raise FileNotFoundError(f"image {path} does not exist")
+        raise InputNotFound(f"image {path} does not exist")
 
 
 def check_command(args) -> int:
     from ..evaluate import make_judge
+    from ..protocols import SUTRequest
+    from ..space import load_space
     from ..sut import build_request, open_sut
     from ..sut.prompt import vqa_prompt
 

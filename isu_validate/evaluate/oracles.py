@@ -10,6 +10,8 @@ from __future__ import annotations
 
 from typing import Mapping
 
+from ..errors import InputError
+
 # Thresholds at which reports give failure rates (RQ1).
 FAILURE_THRESHOLDS: dict[str, list[float]] = {
     "vqa": [1.0, 0.9, 0.8, 0.7, 0.6, 0.5],
@@ -26,9 +28,9 @@ def check_threshold(value: object, what: str = "threshold") -> float:
     try:
         number = float(value)  # type: ignore[arg-type]
     except (TypeError, ValueError):
-        raise ValueError(f"the {what} must be a number in 0..1, got {value!r}") from None
+        raise InputError(f"the {what} must be a number in 0..1, got {value!r}") from None
     if not 0.0 <= number <= 1.0:  # NaN fails too
-        raise ValueError(f"the {what} must lie in 0..1 (the fitness it is compared with does), got {value!r}; "
+        raise InputError(f"the {what} must lie in 0..1 (the fitness it is compared with does), got {value!r}; "
                          "e.g. 0.8 fails a VQA response below 80% weighted correct")
     return number
 
@@ -48,9 +50,9 @@ def conjunction_failed(fitness: Mapping[str, float], thresholds: Mapping[str, fl
 def check_conjunction(thresholds: object) -> dict[str, float]:
     example = "{'f_emb': 0.65, 'f_bleu': 0.1, 'f_meteor': 0.3, 'f_bert': 0.7}"
     if not isinstance(thresholds, Mapping) or not thresholds:
-        raise ValueError(f"the conjunction oracle needs a threshold per metric, e.g. {example}")
+        raise InputError(f"the conjunction oracle needs a threshold per metric, e.g. {example}")
     unknown = sorted(set(thresholds) - set(CAPTION_METRICS))
     if unknown:
-        raise ValueError(f"unknown caption metric(s) {unknown} in the conjunction thresholds; "
+        raise InputError(f"unknown caption metric(s) {unknown} in the conjunction thresholds; "
                          f"known: {', '.join(CAPTION_METRICS)}")
     return {k: check_threshold(v, f"{k} threshold") for k, v in thresholds.items()}

@@ -55,7 +55,8 @@ class CaptionTemplate:
             return table[key]
         if "*" in table:
             return table["*"]
-        return key.lower().replace("_", "-") if isinstance(value, str) else f"{value:g}" if isinstance(value, float) else key
+        return (key.lower().replace("_", "-") if isinstance(value, str)
+                else f"{value:g}" if isinstance(value, float) else key)
 
 
 def tidy(text: str) -> str:

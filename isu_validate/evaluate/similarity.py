@@ -21,7 +21,8 @@ from .models import minilm, torch_threads
 BERT_LAYER = 6
 BERT_MAX_TOKENS = 512
 SETTINGS = {"f_emb": "cosine of all-MiniLM-L6-v2 sentence embeddings (max 256 tokens)",
-            "f_bert": f"BERTScore F1, all-MiniLM-L6-v2 layer {BERT_LAYER}, no idf, unrescaled (max {BERT_MAX_TOKENS} tokens)"}
+            "f_bert": f"BERTScore F1, all-MiniLM-L6-v2 layer {BERT_LAYER}, no idf, unrescaled "
+                      f"(max {BERT_MAX_TOKENS} tokens)"}
 
 
 def cosine(a: np.ndarray, b: np.ndarray) -> float:

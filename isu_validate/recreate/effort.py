@@ -19,11 +19,12 @@ import numpy as np
 from ..paths import resolve_rig
 from ..space import SceneSpace
 from ..tomlfile import read_toml
+from ..errors import UserError
 
 EXACT_MAX = 12
 
 
-class EffortError(ValueError):
+class EffortError(UserError, ValueError):
     """An effort file that cannot be used; the message names the file and the fix."""
 
 

@@ -13,6 +13,7 @@ import numpy as np
 
 from ..analysis.runs import Run
 from ..archive import TestRecord
+from ..errors import InputError
 
 MODES = ("failing", "passing", "mixed")
 
@@ -25,7 +26,7 @@ class Candidate:
 
     @property
     def label_file(self) -> Path:
-        return self.run.path / "labels" / f"{self.record.test_id}.json"
+        return self.run.directory.label_file(self.record.test_id)
 
     @property
     def image(self) -> Path | None:
@@ -65,16 +66,16 @@ def candidates(runs: list[Run]) -> list[Candidate]:
 
 def select(runs: list[Run], mode: str, n: int, seed: int, failing_share: float | None = None) -> Selection:
     if mode not in MODES:
-        raise ValueError(f"unknown selection {mode!r}; use one of {', '.join(MODES)}")
+        raise InputError(f"unknown selection {mode!r}; use one of {', '.join(MODES)}")
     if n <= 0:
-        raise ValueError(f"--n must be positive, got {n}")
+        raise InputError(f"--n must be positive, got {n}")
     if failing_share is not None and not 0.0 <= failing_share <= 1.0:
-        raise ValueError(f"--failing-share must be between 0 and 1, got {failing_share}")
+        raise InputError(f"--failing-share must be between 0 and 1, got {failing_share}")
     pool = candidates(runs)
     failing = [c for c in pool if c.failed]
     passing = [c for c in pool if not c.failed]
     if not pool:
-        raise ValueError("the run(s) hold no test with a verdict, an image and a label to recreate")
+        raise InputError("the run(s) hold no test with a verdict, an image and a label to recreate")
     if mode == "mixed":
         share = failing_share if failing_share is not None else len(failing) / len(pool)
         want = {"failing": round(n * share), "passing": n - round(n * share)}
@@ -90,6 +91,6 @@ def select(runs: list[Run], mode: str, n: int, seed: int, failing_share: float |
         if k:
             chosen += [group[i] for i in rng.choice(len(group), size=k, replace=False)]
     if not chosen:
-        raise ValueError(f"no {mode} tests to recreate in the run(s) ({len(failing)} failing, {len(passing)} passing)")
+        raise InputError(f"no {mode} tests to recreate in the run(s) ({len(failing)} failing, {len(passing)} passing)")
     chosen.sort(key=lambda c: c.position)
     return Selection(chosen, len(failing), len(passing), notes)

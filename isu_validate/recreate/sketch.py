@@ -90,7 +90,8 @@ def top_view(cabin: dict, items: list[Item], camera: tuple[float, float] | None 
     wheel = cabin.get("steering_wheel")
     if wheel:
         u, v = uv(wheel["centre"][0], wheel["centre"][1])
-        shapes.append(f'<line x1="{u - wheel["radius"] * SCALE:.1f}" y1="{v:.1f}" x2="{u + wheel["radius"] * SCALE:.1f}" '
+        shapes.append(f'<line x1="{u - wheel["radius"] * SCALE:.1f}" y1="{v:.1f}" '
+                      f'x2="{u + wheel["radius"] * SCALE:.1f}" '
                       f'y2="{v:.1f}" stroke="#555" stroke-width="5" stroke-linecap="round"/>')
     things = [_thing(item, n, uv, layout) for n, item in enumerate(placed, 1)]   # markers first: labels avoid them
     u0, v0 = uv(0.0, 0.0)

@@ -36,5 +36,6 @@ class ReferenceAdapter:
             else:
                 content = {"caption": self.model.caption(Path(request.image))}
         except (OSError, ValueError) as exc:
-            return Exchange(error=f"reference ISU could not read the image: {exc}", latency_s=time.perf_counter() - start)
+            return Exchange(error=f"reference ISU could not read the image: {exc}",
+                            latency_s=time.perf_counter() - start)
         return Exchange(raw=json.dumps(content), content=content, latency_s=time.perf_counter() - start)

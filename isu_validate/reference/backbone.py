@@ -12,6 +12,8 @@ import io
 
 import numpy as np
 
+from ..errors import InputError
+
 # EfficientNet-Lite was trained on inputs scaled as (x - 127) / 128 (TF reference implementation).
 INPUT_MEAN, INPUT_STD = 127.0, 128.0
 GRID = 2
@@ -62,5 +64,5 @@ def read_rgb(path) -> np.ndarray:
 
     image = cv2.imread(str(path), cv2.IMREAD_COLOR)
     if image is None:
-        raise ValueError(f"cannot read image {path}: missing, empty or not an image file")
+        raise InputError(f"cannot read image {path}: missing, empty or not an image file")
     return cv2.cvtColor(image, cv2.COLOR_BGR2RGB)

@@ -39,7 +39,8 @@ def describe(p: dict[str, str], variant: int = 0) -> str:
     if things:
         listed = things[0] if len(things) == 1 else ", ".join(things[:-1]) + " and " + things[-1]
         opener = _pick(["There is also ", "The car also contains ", "I can also see "], variant, 7)
-        sentences.append(opener + listed + _pick([" on the passenger seat", " on the front passenger seat"], variant, 8))
+        sentences.append(opener + listed
+                         + _pick([" on the passenger seat", " on the front passenger seat"], variant, 8))
     return ". ".join(s[0].upper() + s[1:] for s in sentences if s) + "."
 
 

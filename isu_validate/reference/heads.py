@@ -11,6 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import InputNotFound
+
 
 @dataclass
 class Head:
@@ -64,7 +66,7 @@ def save_heads(heads: list[Head], folder: Path, meta: dict) -> None:
 def load_heads(folder: Path) -> tuple[list[Head], dict]:
     meta_path, array_path = folder / "heads.json", folder / "heads.npz"
     if not meta_path.exists() or not array_path.exists():
-        raise FileNotFoundError(f"no trained reference ISU in {folder} (heads.json/heads.npz missing); "
+        raise InputNotFound(f"no trained reference ISU in {folder} (heads.json/heads.npz missing); "
                                 "train one with `isu-validate reference train`")
     meta = json.loads(meta_path.read_text())
     with np.load(array_path) as arrays:

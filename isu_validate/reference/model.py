@@ -10,6 +10,7 @@ from ..space import SceneSpace
 from .backbone import Backbone, read_rgb
 from .captioner import describe
 from .heads import load_heads
+from ..errors import InputError
 
 
 def default_model_dir() -> Path:
@@ -24,7 +25,7 @@ class ReferenceISU:
         self.heads = {h.feature: h for h in heads}
         unknown = set(self.heads) - set(space.names)
         if unknown:
-            raise ValueError(f"the reference ISU in {self.model_dir} was trained for features {sorted(unknown)} "
+            raise InputError(f"the reference ISU in {self.model_dir} was trained for features {sorted(unknown)} "
                              f"that space {space.name!r} does not have; retrain it for this space")
         size = self.meta.get("input_size", [320, 240])
         self.backbone = backbone or Backbone(*size)

@@ -22,6 +22,7 @@ from ..progress import Progress
 from ..space import SceneSpace
 from .backbone import Backbone, read_rgb
 from .heads import Head, fit_head, save_heads
+from ..errors import InputError
 
 
 @dataclass
@@ -114,7 +115,7 @@ def fit_heads(space: SceneSpace, X: np.ndarray, examples: list[Example], seed: i
     for feature in space.predicted:
         rows = [i for i, e in enumerate(examples) if feature.name in e.scene]
         if not rows:
-            raise ValueError(f"no training scene has feature {feature.name!r} active; use a larger --n")
+            raise InputError(f"no training scene has feature {feature.name!r} active; use a larger --n")
         labels = [feature.truth(examples[i].scene[feature.name]) for i in rows]
         heads.append(fit_head(feature.name, X[rows], labels, seed=seed))
     return heads

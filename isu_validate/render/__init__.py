@@ -2,7 +2,8 @@
 
 Host-side modules never import bpy; only ``isu_validate.render.blender`` (run inside the worker
 subprocess) does. The search's evaluation calls ``open_renderer(...)`` and then the ``Renderer``
-protocol of ``isu_validate.protocols``."""
+protocol of ``isu_validate.protocols``. The camera a render looks through is ``capture.camera``'s
+``Camera`` (``load_camera``); ``camera.py`` here is what Blender renders for it."""
 from __future__ import annotations
 
 import os
@@ -11,31 +12,36 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from capture.camera import Camera
+
 from .cabin import CabinRigError, load_cabin
-from .camera import (CameraRig, CameraRigError, camera_from_dict, load_camera, load_render_camera, look_at_rotation,
-                     pinhole_plan)
+from .camera import pinhole_plan
 from .presets import PRESETS, Preset, get_preset
 from .renderer import DEFAULTS, RENDERER_VERSION, BlenderRenderer
 
 
-def open_renderer(preset: "str | Preset" = "draft", camera: str | os.PathLike | CameraRig = "default",
+def open_renderer(preset: "str | Preset" = "draft", camera: str | os.PathLike | Camera = "default",
                   cabin: str | os.PathLike = "default", channels: Sequence[str] | str = (),
                   cache_dir: str | os.PathLike | None = None, log_dir: str | os.PathLike | None = None,
                   timeout_s: float = 240.0, space=None, threads: int = 0,
-                  extrinsics_from: str | os.PathLike | CameraRig | None = None,
+                  extrinsics_from: str | os.PathLike | Camera | None = None,
                   min_visible: Mapping[str, float] | None = None) -> BlenderRenderer:
     """A renderer for one process. Its Blender worker starts on the first render (each process of a
     pool gets its own); ``close()`` stops it. ``channels``: any of "seg", "depth", "exr".
 
-    A camera file whose pose was never registered is refused (CameraRigError) unless
+    A camera file whose pose was never registered is refused (CameraFileError) unless
     ``extrinsics_from`` names a registered rig to take the pose from. ``min_visible`` overrides the
-    space's per-feature visibility thresholds ({feature or "*": share})."""
+    space's per-feature visibility thresholds ({feature or "*": share}).
+
+        with open_renderer(preset="draft", space=space) as renderer:      # one warm worker, many scenes
+            frame = renderer.render(scene, "scene.png")   # frame.image, frame.visibility, frame.occluded
+    """
     return BlenderRenderer(preset, camera, cabin, channels, cache_dir, log_dir, timeout_s, space, threads,
                            extrinsics_from, min_visible)
 
 
 def render_board(image_path: str | os.PathLike, board_size_m: tuple[float, float], pose, out: str | os.PathLike,
-                 camera: str | os.PathLike | CameraRig = "default", preset: str = "calibration",
+                 camera: str | os.PathLike | Camera = "default", preset: str = "calibration",
                  scene: Mapping[str, Any] | None = None, renderer: BlenderRenderer | None = None,
                  channels: Sequence[str] = ()):
     """Render a flat, self-lit textured board (e.g. a ChArUco image) through a camera rig.
@@ -56,6 +62,5 @@ def render_board(image_path: str | os.PathLike, board_size_m: tuple[float, float
             renderer.close()
 
 
-__all__ = ["BlenderRenderer", "CabinRigError", "CameraRig", "CameraRigError", "DEFAULTS", "PRESETS", "Preset",
-           "RENDERER_VERSION", "camera_from_dict", "get_preset", "load_cabin", "load_camera", "load_render_camera",
-           "look_at_rotation", "open_renderer", "pinhole_plan", "render_board"]
+__all__ = ["BlenderRenderer", "CabinRigError", "DEFAULTS", "PRESETS", "Preset", "RENDERER_VERSION", "get_preset",
+           "load_cabin", "open_renderer", "pinhole_plan", "render_board"]

@@ -8,6 +8,7 @@ import tomllib
 from pathlib import Path
 
 from ..paths import resolve_rig
+from ..errors import UserError
 
 PHONE_POSITIONS = tuple(f"P{i}" for i in range(1, 11))
 ASSET_PARTS = ("cabin", "driver_seat", "passenger_seat", "rear_bench", "steering_wheel",
@@ -23,7 +24,7 @@ _REQUIRED = {"shell": ("x_rear", "x_front", "half_width", "roof", "belt_line", "
              "lighting": ("environment", "environment_strength", "window_light_w", "interior_light_w")}
 
 
-class CabinRigError(ValueError):
+class CabinRigError(UserError, ValueError):
     """A cabin rig file is missing something or names an asset that cannot be used."""
 
 

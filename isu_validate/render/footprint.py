@@ -41,11 +41,6 @@ def project(triangles_cam: np.ndarray, f: float, cx: float, cy: float) -> np.nda
     return np.concatenate([f * triangles_cam[..., 0:1] / z + cx, f * triangles_cam[..., 1:2] / z + cy], axis=-1)
 
 
-def fill_triangles(triangles_px: np.ndarray, width: int, height: int) -> np.ndarray:
-    """Boolean (height, width) mask of the pixels whose centres lie in any of the triangles (T,3,2)."""
-    return fill_parts([triangles_px], width, height)[0]
-
-
 def fill_parts(parts_px: list[np.ndarray], width: int, height: int) -> np.ndarray:
     """Boolean (parts, height, width) masks: the union of each part's triangles (T,3,2), in pixels.
 

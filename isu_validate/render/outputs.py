@@ -8,8 +8,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from ..exr import read_exr, write_exr
+from ..srgb import srgb_encode
 from .camera import PinholePlan, warp
-from .exr import read_exr, write_exr
 from .footprint import unpack_counts
 from .labels import INSTANCES, class_map, semantic_lut
 
@@ -27,7 +28,8 @@ def parse_channels(channels) -> tuple[str, ...]:
     channels = tuple(sorted({c.strip() for c in channels}))
     unknown = [c for c in channels if c not in CHANNELS]
     if unknown:
-        raise ValueError(f"unknown render channel(s) {', '.join(unknown)}; channels: {', '.join(CHANNELS)}")
+        from ..errors import InputError   # the user's --channels
+        raise InputError(f"unknown render channel(s) {', '.join(unknown)}; channels: {', '.join(CHANNELS)}")
     return channels
 
 
@@ -36,22 +38,6 @@ def _pass(passes: dict, suffix: str) -> np.ndarray:
         if name.endswith(suffix):
             return data
     raise KeyError(f"render pass {suffix!r} missing from the worker's EXR (have {', '.join(passes)})")
-
-
-def srgb_levels(linear):
-    """The sRGB transfer curve (IEC 61966-2-1): linear values -> display levels (0..1 for 0..1), not
-    clipped. The one place the curve is written; 8-bit frames, colour fitting and the camera model use it."""
-    return np.where(linear <= 0.0031308, 12.92 * linear, 1.055 * np.power(linear, 1 / 2.4) - 0.055)
-
-
-def srgb_to_linear(levels):
-    """The inverse of ``srgb_levels``: display levels -> linear values."""
-    return np.where(levels <= 0.04045, levels / 12.92, ((levels + 0.055) / 1.055) ** 2.4)
-
-
-def srgb_encode(linear: np.ndarray) -> np.ndarray:
-    """Scene-linear RGB -> 8-bit sRGB (Blender's 'Standard' view transform)."""
-    return np.round(srgb_levels(np.clip(linear, 0.0, 1.0)) * 255.0).astype(np.uint8)
 
 
 def channel_paths(out: Path) -> dict[str, Path]:

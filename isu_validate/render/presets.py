@@ -3,6 +3,8 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, replace
 
+from ..errors import InputError
+
 
 @dataclass(frozen=True)
 class Preset:
@@ -44,5 +46,5 @@ PRESETS = {
 
 def get_preset(name: str, **overrides) -> Preset:
     if name not in PRESETS:
-        raise ValueError(f"unknown render preset {name!r}; presets: {', '.join(PRESETS)}")
+        raise InputError(f"unknown render preset {name!r}; presets: {', '.join(PRESETS)}")
     return replace(PRESETS[name], **overrides) if overrides else PRESETS[name]

@@ -13,15 +13,17 @@ import time
 from pathlib import Path
 from typing import Any, Mapping
 
+from capture.camera import Camera, load_render_camera
 from capture.camera_model.apply import apply as apply_imaging
 
 from ..protocols import RenderError, RenderResult
 from ..space import SceneSpace, load_space
+from ..srgb import srgb_encode
 from .cabin import cabin_hash, load_cabin
 from .cache import RenderCache
-from .camera import CameraRig, load_render_camera, pinhole_plan
+from .camera import pinhole_plan
 from .frame_check import frame_problem, frame_stats
-from .outputs import channel_paths, footprint_pixels, parse_channels, srgb_encode, write_outputs
+from .outputs import channel_paths, footprint_pixels, parse_channels, write_outputs
 from .people import People, PeopleStore
 from .people.store import code_version as people_version
 from .presets import Preset, get_preset
@@ -43,10 +45,10 @@ DEFAULTS = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height
 
 
 class BlenderRenderer:
-    def __init__(self, preset: str | Preset = "draft", camera: str | os.PathLike | CameraRig = "default",
+    def __init__(self, preset: str | Preset = "draft", camera: str | os.PathLike | Camera = "default",
                  cabin: str | os.PathLike | dict = "default", channels=(), cache_dir=None, log_dir=None,
                  timeout_s: float = 240.0, space: SceneSpace | str | None = None, threads: int = 0,
-                 extrinsics_from: str | os.PathLike | CameraRig | None = None, min_visible=None,
+                 extrinsics_from: str | os.PathLike | Camera | None = None, min_visible=None,
                  people_cache: str | os.PathLike | None = None):
         self.preset = get_preset(preset, threads=threads) if isinstance(preset, str) else preset
         self.rig = load_render_camera(camera, extrinsics_from)   # refuses an unregistered pose
@@ -58,7 +60,8 @@ class BlenderRenderer:
         self.parts = needed_parts(self.space)                        # whose footprints each frame needs
         self.min_visible = min_visible_for(self.space, min_visible)  # feature -> threshold
         self.cache = RenderCache(cache_dir) if cache_dir else None
-        self.log_path = Path(log_dir or Path(tempfile.gettempdir()) / "isu-validate-logs") / f"blender-{os.getpid()}.log"
+        self.log_path = (Path(log_dir or Path(tempfile.gettempdir()) / "isu-validate-logs")
+                         / f"blender-{os.getpid()}.log")
         self.timeout_s = timeout_s
         self._tmp = Path(tempfile.mkdtemp(prefix="isu-render-"))
         self._worker: BlenderWorker | None = None
@@ -185,7 +188,7 @@ class BlenderRenderer:
     def _render_with_retry(self, features: dict, out: Path, extras: dict, tag: str, parts=(),
                            developed: dict | None = None):
         last = None
-        for attempt in (1, 2):
+        for _attempt in (1, 2):
             try:
                 return self._render_once(features, out, extras, tag, list(parts), developed)
             except (WorkerCrashed, WorkerTimeout) as exc:   # restart and retry once
@@ -249,7 +252,7 @@ class BlenderRenderer:
     def _write_label(self, path: Path, canonical: dict, key: str, cached: bool, timings: dict, seen: dict):
         label = {"scene": canonical, "space": self.space.name, "preset": self.preset.name,
                  "renderer": RENDERER_VERSION, "cache_key": key, "cached": cached,
-                 "camera": self.render_rig.to_dict(), "camera_source": self.rig.source,
+                 "camera": self.render_rig.geometry(), "camera_source": self.rig.source,
                  "extrinsics_from": self.rig.pose_source or None,
                  "cabin": self.cabin.get("source"), **seen, "timings": timings}
         if self.unrendered:

@@ -18,10 +18,11 @@ from __future__ import annotations
 
 from typing import Iterable, Mapping
 
+from ..config import DEFAULT_MIN_VISIBLE   # a run setting's default, shown by `run --help`
+from ..errors import InputError
 from ..space import SceneSpace, SpaceError
 from .labels import INSTANCE_ID
 
-DEFAULT_MIN_VISIBLE = 0.25     # a quarter of a thing seen: partly hidden is a fair test, hardly seen is not
 ABSENT_ANSWERS = ("NO", "NONE")  # true answers that mean "nothing there to see"
 ALL = "*"                        # the override key that applies to every feature
 
@@ -58,7 +59,7 @@ def parse_min_visible(items: Iterable[str]) -> dict[str, float]:
         try:
             share = float(value)
         except ValueError:
-            raise ValueError(f"--min-visible {item!r}: give a share in [0, 1] (e.g. 0.25) or FEATURE=SHARE") from None
+            raise InputError(f"--min-visible {item!r}: give a share in [0, 1] (e.g. 0.25) or FEATURE=SHARE") from None
         out[name.strip() or ALL] = share
     return out
 
@@ -70,10 +71,10 @@ def min_visible_for(space: SceneSpace, overrides: Mapping[str, float] | None = N
     judged = {f.name: f for f in space.predicted if f.visible_parts}
     for name, share in overrides.items():
         if name != ALL and name not in judged:
-            raise ValueError(f"--min-visible names {name!r}, which is not a predicted feature with visible_parts in "
+            raise InputError(f"--min-visible names {name!r}, which is not a predicted feature with visible_parts in "
                              f"space {space.name!r}; those are: {', '.join(judged) or 'none'}")
         if not 0.0 <= float(share) <= 1.0:
-            raise ValueError(f"--min-visible {name}={share}: a share must lie in [0, 1]")
+            raise InputError(f"--min-visible {name}={share}: a share must lie in [0, 1]")
     out = {}
     for name, feature in judged.items():
         default = DEFAULT_MIN_VISIBLE if feature.min_visible is None else feature.min_visible

@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..space import SceneSpace
+from ..errors import InputError
 
 _TOP_UP_TRIES = 200
 
@@ -18,7 +19,7 @@ class SearchAlgorithm:
 
     def __init__(self, space: SceneSpace, pop_size: int, seed: int):
         if pop_size < 2:
-            raise ValueError(f"population size must be at least 2, got {pop_size}")
+            raise InputError(f"population size must be at least 2, got {pop_size}")
         self.space, self.pop_size, self.seed = space, pop_size, seed
         self.seen: set[str] = set()
 
@@ -40,7 +41,7 @@ class SearchAlgorithm:
 
     def learn(self, records: list) -> None:
         """Tests of earlier runs of the same SUT, before the first ``ask`` (``run --learn-from``)."""
-        raise ValueError(f"the {self.name or 'chosen'} search does not learn from earlier runs (--learn-from); "
+        raise InputError(f"the {self.name or 'chosen'} search does not learn from earlier runs (--learn-from); "
                          "use --algorithm surrogate")
 
     def tell(self, F: np.ndarray, records: list | None = None) -> None:

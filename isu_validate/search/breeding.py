@@ -54,7 +54,8 @@ class Breeder:
         for d, n in zip(D, N):
             scene = dict(base)
             scene.update({f.name: f.values[int(v)] for f, v in zip(self.discrete, d)})
-            scene.update({f.name: (int(round(v)) if f.type == "integer" else float(v)) for f, v in zip(self.numeric, n)})
+            scene.update({f.name: (int(round(v)) if f.type == "integer" else float(v))
+                          for f, v in zip(self.numeric, n)})
             out.append(scene)
         return out
 

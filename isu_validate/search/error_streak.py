@@ -10,8 +10,7 @@ from __future__ import annotations
 
 from ..archive import TestRecord
 from ..archive.run_file import RunError
-
-DEFAULT_LIMIT = 5
+from ..config import DEFAULT_SUT_ERROR_LIMIT as DEFAULT_LIMIT
 
 
 class SUTErrorStreak:

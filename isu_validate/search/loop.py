@@ -10,7 +10,6 @@ validated first, so a typo leaves no half-started run behind.
 """
 from __future__ import annotations
 
-import json
 import platform
 import time
 from dataclasses import asdict, dataclass, field
@@ -22,57 +21,19 @@ import numpy as np
 from ..archive import Archive, TestRecord
 from ..archive.run_file import ARCHIVE_FILE, RUN_FILE, RunError, check_run_dir, write_run_file
 from ..execution import make_executor
-from ..pipeline import Job, PipelineConfig, check_render_settings
+from ..config import RunConfig   # a light module: the CLI shows RunConfig's defaults
+from ..pipeline import Job, check_render_settings
 from ..progress import Progress
 from ..space import load_space
 from .algorithms import make_algorithm
 from .diversity import DiversityTracker
-from .error_streak import DEFAULT_LIMIT, SUTErrorsStop, SUTErrorStreak
+from .error_streak import SUTErrorsStop, SUTErrorStreak
 from .prior_runs import read_prior_tests
 
 __all__ = ["ARCHIVE_FILE", "RUN_FILE", "RunConfig", "RunError", "RunSummary", "SUTErrorsStop", "run_search"]
 # The fitness the search sees for a test without a verdict (SUT or render error): the
 # best possible answer, so the search never mistakes an error for a failure.
 NO_VERDICT_FITNESS = 1.0
-# How the work is spread, or when the run stops: these may change when a run is resumed.
-VOLATILE = ("workers", "cluster", "budget_tests", "budget_s", "stop_after_sut_errors")
-
-
-@dataclass
-class RunConfig:
-    pipeline: PipelineConfig
-    algorithm: str = "surrogate"
-    pop_size: int = 10
-    seed: int = 1
-    budget_tests: int | None = 40
-    budget_s: float | None = None
-    workers: int = 1
-    cluster: str | None = None
-    stop_after_sut_errors: int = DEFAULT_LIMIT  # SUT errors in a row with no answer between; 0 = never stop
-    learn_from: tuple[str, ...] = ()            # earlier runs of the same SUT the search learns from first
-
-    def check(self) -> None:
-        """The plain values; the components are checked by building them (``make_executor``)."""
-        if self.budget_tests is not None and self.budget_tests < 1:
-            raise ValueError(f"--budget must be at least 1 test, got {self.budget_tests}")
-        if self.budget_s is not None and not self.budget_s > 0:
-            raise ValueError(f"--budget-time must be a positive number of seconds, got {self.budget_s}")
-        if self.workers < 1:
-            raise ValueError(f"--workers must be at least 1, got {self.workers}")
-        if self.stop_after_sut_errors < 0:
-            raise ValueError(f"--stop-after-sut-errors must be 0 (never stop) or more, got {self.stop_after_sut_errors}")
-
-    def identity(self) -> dict:
-        """What must match for a resume to continue the same search."""
-        data = asdict(self)
-        for volatile in VOLATILE:
-            data.pop(volatile)
-        data["pipeline"].pop("run_dir")
-        data["pipeline"].pop("render_threads")  # how the work is spread, not what it computes
-        if not data["learn_from"]:
-            data.pop("learn_from")  # runs started before --learn-from existed resume unchanged
-        return json.loads(json.dumps(data))  # as stored in run.json (tuples become lists)
-
 
 @dataclass
 class RunSummary:
@@ -99,7 +60,11 @@ def _versions() -> dict:
 
 def run_search(config: RunConfig, resume: bool = False, progress_stream=None) -> RunSummary:
     """Run (or resume) a search; raises RunError (nothing written) for a run that cannot start as
-    asked, and SUTErrorsStop (everything evaluated kept) when the SUT keeps failing."""
+    asked, and SUTErrorsStop (everything evaluated kept) when the SUT keeps failing.
+
+        summary = run_search(RunConfig(PipelineConfig(run_dir="runs/s1", preset="draft"), budget_tests=4, pop_size=2))
+        summary.tests, summary.failures, tests_table(summary.run_dir)
+    """
     config.check()
     space = load_space(config.pipeline.space)
     check_render_settings(config.pipeline, space)   # an unregistered camera, a bad --min-visible

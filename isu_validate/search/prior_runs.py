@@ -14,7 +14,7 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..archive import TestRecord, read_records
+from ..archive import RunDir, TestRecord
 from ..archive.run_file import ARCHIVE_FILE, RunError, read_run_file
 
 CHECKED = ("sut", "mode", "space")   # pipeline settings an earlier run must share with this one
@@ -33,11 +33,11 @@ def read_prior_tests(run_dirs, pipeline, space, this_run) -> PriorTests:
     for folder in map(Path, run_dirs):
         if folder.resolve() == Path(this_run).resolve():
             raise RunError(f"--learn-from {folder}: that is this run's own folder; name earlier runs")
-        if not (folder / ARCHIVE_FILE).exists():
+        if not RunDir(folder).has_archive():
             raise RunError(f"--learn-from {folder}: not a run directory (no {ARCHIVE_FILE}); name the --out "
                            "folders of earlier runs of the same SUT")
         _check_same_setup(folder, read_run_file(folder), pipeline, space)
-        records += [r for r in read_records(folder / ARCHIVE_FILE) if not r.errored and r.primary is not None]
+        records += [r for r in RunDir(folder).records() if not r.errored and r.primary is not None]
     if not records:
         raise RunError(f"--learn-from {', '.join(map(str, run_dirs))}: no test with a verdict to learn from")
     digest = hashlib.sha256(json.dumps([(r.scene_key, r.primary) for r in records]).encode()).hexdigest()[:16]

@@ -228,7 +228,8 @@ class ErrorModel:
         """(scenes, targets): whether the target's question is asked of the scene."""
         if self.mode == "fitness":
             return np.ones((len(canonical_scenes), 1), dtype=bool)
-        return np.array([[t in s for t in self.targets] for s in canonical_scenes], dtype=bool).reshape(-1, len(self.targets))
+        return np.array([[t in s for t in self.targets] for s in canonical_scenes],
+                        dtype=bool).reshape(-1, len(self.targets))
 
     def _loss_rows(self, X: np.ndarray, asked: np.ndarray, rates) -> np.ndarray:
         if not self._models or len(X) == 0:

@@ -77,7 +77,8 @@ def parse_condition(raw: Any, where: str) -> Condition:
         elif isinstance(spec, Mapping):
             unknown = set(spec) - {"in", "not_in", "min", "max"}
             if unknown:
-                raise SpaceError(f"{where}: condition on {feature!r} has unknown keys {sorted(unknown)}; use in, not_in, min, max")
+                raise SpaceError(f"{where}: condition on {feature!r} has unknown keys {sorted(unknown)}; "
+                                 "use in, not_in, min, max")
             terms.append(Term(
                 feature,
                 inside=tuple(spec["in"]) if "in" in spec else None,

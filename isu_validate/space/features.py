@@ -179,7 +179,8 @@ def _parse_prediction(raw: Mapping[str, Any], kwargs: dict, here: str) -> dict:
     for value in kwargs["values"]:
         answer = truth_map.get(value, truth_map.get("*", value))
         if answer not in options:
-            raise SpaceError(f"{here}: value {value!r} has the answer {answer!r}, which is not among the options {list(options)}")
+            raise SpaceError(f"{here}: value {value!r} has the answer {answer!r}, "
+                             f"which is not among the options {list(options)}")
     return {"predicted": True, "weight": float(weight), "question": question.strip(),
             "options": options, "truth_map": truth_map, **_parse_visibility(raw, here)}
 

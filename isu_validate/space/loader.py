@@ -19,7 +19,12 @@ _MAX_ENUMERATION = 200_000
 
 
 def load_space(name_or_path: str | os.PathLike = DEFAULT_SPACE) -> SceneSpace:
-    """A space by shipped name (``isu-paper``) or file path; raises SpaceError naming the problem."""
+    """A space by shipped name (``isu-paper``) or file path; raises SpaceError naming the problem.
+
+        space = load_space("isu-paper")
+        scene = space.sample(np.random.default_rng(0))[0]   # a valid random scene
+        space.questions(scene)                                # what the SUT is asked about it
+    """
     try:
         path = resolve_rig("spaces", name_or_path)
     except FileNotFoundError as exc:

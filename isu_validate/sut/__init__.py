@@ -8,10 +8,19 @@ Modules: ``prompt`` (what is asked), ``adapters/`` (how: openai, command, http, 
 ``vote`` (majority over repeats), ``cache`` (replies on disk), ``runner`` (the SUT the search calls),
 ``registry`` (spec -> SUT), ``redact`` (keys never leave).
 """
+from __future__ import annotations
+
+from ..lazy import lazy_names
 from .errors import SUTConfigError, TransportError
-from .prompt import DEFAULT_CAPTION_PROMPT, build_request, vqa_prompt
-from .registry import ADAPTERS, open_sut, register_adapter
-from .runner import RepeatingSUT, interpret
+
+# the rest loads on first use (PEP 562): the command line reads ``prompt``'s styles for --help
+# without loading the adapters. public name -> the submodule it lives in
+_NAMES = {"DEFAULT_CAPTION_PROMPT": ".prompt", "build_request": ".prompt", "vqa_prompt": ".prompt",
+          "ADAPTERS": ".registry", "open_sut": ".registry", "register_adapter": ".registry",
+          "RepeatingSUT": ".runner", "interpret": ".runner"}
 
 __all__ = ["ADAPTERS", "DEFAULT_CAPTION_PROMPT", "RepeatingSUT", "SUTConfigError", "TransportError",
            "build_request", "interpret", "open_sut", "register_adapter", "vqa_prompt"]
+
+
+__getattr__, __dir__ = lazy_names(__name__, _NAMES)

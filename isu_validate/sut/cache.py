@@ -11,11 +11,11 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import tempfile
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
+from ..atomic import write_json
 from ..protocols import SUTRequest
 
 CACHE_VERSION = 1
@@ -57,9 +57,4 @@ class ResponseCache:
         return entry if entry.get("version") == CACHE_VERSION else None
 
     def put(self, key: str, entry: dict[str, Any]) -> None:
-        path = self._path(key)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=".json")
-        with os.fdopen(fd, "w") as f:
-            json.dump({"version": CACHE_VERSION, **entry}, f)
-        os.replace(tmp, path)
+        write_json(self._path(key), {"version": CACHE_VERSION, **entry})

@@ -8,8 +8,10 @@ scene of a run would only hide it.
 """
 from __future__ import annotations
 
+from ..errors import UserError
 
-class SUTConfigError(ValueError):
+
+class SUTConfigError(UserError, ValueError):
     """The SUT cannot be reached as configured; the message names the problem and the fix."""
 
 

@@ -22,6 +22,7 @@ import requests
 from .errors import SUTConfigError, TransportError
 from .limits import RateLimiter
 from .redact import Redactor
+from ..errors import InputError
 
 RETRY_STATUS = {429, 500, 502, 503, 504, 529}
 _BODY_SHOWN = 300
@@ -71,7 +72,7 @@ class HttpClient:
                  limiter: RateLimiter | None = None, redactor: Redactor | None = None,
                  sleep: Callable[[float], None] = time.sleep, seed: int | None = None):
         if timeout_s <= 0:
-            raise ValueError(f"timeout_s must be positive, got {timeout_s}")
+            raise InputError(f"timeout_s must be positive, got {timeout_s}")
         self.timeout_s = timeout_s
         self.retry = retry or RetryPolicy()
         self.limiter = limiter or RateLimiter()
@@ -92,7 +93,8 @@ class HttpClient:
                     status, text, resp_headers = self._post_once(url, body, headers)
             except TransportError as exc:  # timeout or connection failure
                 if last:
-                    raise TransportError(f"{exc} (gave up after {attempt + 1} attempts)", attempts=attempt + 1) from None
+                    raise TransportError(f"{exc} (gave up after {attempt + 1} attempts)",
+                                         attempts=attempt + 1) from None
                 self._sleep(self.retry.delay(attempt, None, self._rng))
                 continue
             if 200 <= status < 300:

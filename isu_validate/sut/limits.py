@@ -10,13 +10,15 @@ import time
 from collections import deque
 from contextlib import contextmanager
 
+from ..errors import InputError
+
 
 class RateLimiter:
     def __init__(self, max_concurrency: int = 4, rpm: float | None = None, clock=time.monotonic, sleep=time.sleep):
         if max_concurrency < 1:
-            raise ValueError(f"max_concurrency must be at least 1, got {max_concurrency}")
+            raise InputError(f"max_concurrency must be at least 1, got {max_concurrency}")
         if rpm is not None and rpm <= 0:
-            raise ValueError(f"rpm (requests per minute) must be positive, got {rpm}")
+            raise InputError(f"rpm (requests per minute) must be positive, got {rpm}")
         self._slots = threading.BoundedSemaphore(max_concurrency)
         self.rpm = rpm
         self._starts: deque[float] = deque()

@@ -19,8 +19,10 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from isu_validate.errors import InputError
 from isu_validate.space import SceneSpace
 from isu_validate.space.conditions import Condition, Term, parse_condition
+from isu_validate.sut.benchmark_names import BENCHMARK_SUTS
 
 
 ANY_WRONG = "*"
@@ -133,7 +135,7 @@ def random_blind_spots(space: SceneSpace, seed: int, noise: float = 0.03, n_spot
     rng = np.random.default_rng(seed)
     predicted = [f for f in space.predicted if len(f.options) > 1]
     if not predicted:
-        raise ValueError(f"space {space.name!r} has no predicted feature: a benchmark SUT has nothing to get wrong")
+        raise InputError(f"space {space.name!r} has no predicted feature: a benchmark SUT has nothing to get wrong")
     probe = [space.canonical(s) for s in space.sample(np.random.default_rng(seed + 1), 1000)]
     spots: list[BlindSpot] = []
     for _ in range(100 * n_spots):
@@ -160,13 +162,11 @@ def make_benchmark_sut(name: str, space: SceneSpace) -> BenchmarkSUT:
     if name == "random-spots" or name.startswith("random-spots-"):
         suffix = name[len("random-spots-"):] if name != "random-spots" else "1"
         if not suffix.isdigit():
-            raise ValueError(f"benchmark SUT {name!r}: write random-spots-SEED with a whole number SEED")
+            raise InputError(f"benchmark SUT {name!r}: write random-spots-SEED with a whole number SEED")
         return random_blind_spots(space, int(suffix))
-    raise ValueError(f"unknown benchmark SUT {name!r}; use one of {', '.join(BENCHMARK_SUTS)} "
+    raise InputError(f"unknown benchmark SUT {name!r}; use one of {', '.join(BENCHMARK_SUTS)} "
                      "(random-spots-SEED draws other blind spots)")
 
-
-BENCHMARK_SUTS = ("blind-spots", "blind-spots-noisy", "random-spots")
 
 
 def _random_term(feature, rng: np.random.Generator) -> Term:

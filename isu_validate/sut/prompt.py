@@ -20,12 +20,16 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Mapping, Sequence
 
-from ..protocols import SUTRequest
-from ..space import Question, SceneSpace
+from ..errors import InputError
 
-DEFAULT_CAPTION_PROMPT = "Describe what is visible in the scene, paying attention especially to humans and loose objects"
+if TYPE_CHECKING:   # the styles are read by the command line's --help: no numpy, no space package
+    from ..protocols import SUTRequest
+    from ..space import Question, SceneSpace
+
+DEFAULT_CAPTION_PROMPT = ("Describe what is visible in the scene, paying attention especially to humans "
+                          "and loose objects")
 MODES = ("vqa", "vc")
 QUESTIONS_SLOT = "{questions}"
 
@@ -76,13 +80,9 @@ DEFAULT_PROMPT_STYLE = "paper"
 def prompt_style(name: str | None) -> PromptStyle:
     style = PROMPT_STYLES.get(name or DEFAULT_PROMPT_STYLE)
     if style is None:
-        raise ValueError(f"unknown prompt style {name!r}; use one of {', '.join(PROMPT_STYLES)} "
+        raise InputError(f"unknown prompt style {name!r}; use one of {', '.join(PROMPT_STYLES)} "
                          f"(default {DEFAULT_PROMPT_STYLE}: the paper's Figure 2)")
     return style
-
-
-def questions_block(questions: Sequence[Question], style: str | None = None) -> str:
-    return prompt_style(style).questions(questions)
 
 
 def vqa_prompt(space: SceneSpace, questions: Sequence[Question], header: str | None = None,
@@ -100,9 +100,14 @@ def vqa_prompt(space: SceneSpace, questions: Sequence[Question], header: str | N
 
 def build_request(space: SceneSpace, scene: Mapping[str, Any], image: str | Path, mode: str,
                   prompt: str | None = None, style: str | None = None) -> SUTRequest:
-    """The request for one scene: VQA questions about its active predicted features, or a caption prompt."""
+    """The request for one scene: VQA questions about its active predicted features, or a caption prompt.
+
+        request = build_request(space, scene, "scene.png", "vqa")     # request.prompt, request.questions
+    """
+    from ..protocols import SUTRequest
+
     if mode not in MODES:
-        raise ValueError(f"unknown SUT mode {mode!r}; use 'vqa' (questions) or 'vc' (captioning)")
+        raise InputError(f"unknown SUT mode {mode!r}; use 'vqa' (questions) or 'vc' (captioning)")
     if mode == "vc":
         return SUTRequest(mode="vc", image=Path(image), prompt=prompt or DEFAULT_CAPTION_PROMPT, questions=())
     questions = space.questions(scene)

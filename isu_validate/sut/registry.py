@@ -51,10 +51,15 @@ def split_spec(spec: str) -> tuple[str, str]:
 def open_sut(spec: str, *, space: SceneSpace, repeats: int = 1, cache_dir: str | os.PathLike | None = None,
              timeout_s: float = 60.0, **options: Any) -> RepeatingSUT:
     """The SUT for ``spec``, asked ``repeats`` times per scene (majority vote), replies cached under
-    ``cache_dir`` (none when None).  Raises SUTConfigError naming the problem and the fix."""
+    ``cache_dir`` (none when None).  Raises SUTConfigError naming the problem and the fix.
+
+        with open_sut("reference", space=space) as sut:       # or "openai:gpt-4o@https://api.openai.com/v1"
+            response = sut.query(build_request(space, scene, "scene.png", "vqa"))
+    """
     scheme, target = split_spec(spec)
     if scheme != "reference" and not target:
-        raise SUTConfigError(f"SUT spec {spec!r} names nothing after '{scheme}:'; write {USAGE.get(scheme, scheme + ':...')}")
+        raise SUTConfigError(f"SUT spec {spec!r} names nothing after '{scheme}:'; "
+                             f"write {USAGE.get(scheme, scheme + ':...')}")
     if timeout_s <= 0:
         raise SUTConfigError(f"SUT timeout must be positive, got {timeout_s}")
     extra = {"space": space} if scheme in NEEDS_SPACE else {}

@@ -14,6 +14,7 @@ from .cache import ResponseCache
 from .exchange import Adapter, Exchange
 from .parse import OUTCOME_ANSWERED, OUTCOME_ERROR, OUTCOME_PARTIAL, parse_caption, parse_vqa
 from .vote import majority
+from ..errors import InputError
 
 
 def interpret(request: SUTRequest, exchange: Exchange) -> SUTResponse:
@@ -41,7 +42,7 @@ class RepeatingSUT:
 
     def __init__(self, adapter: Adapter, *, repeats: int = 1, cache: ResponseCache | None = None):
         if repeats < 1:
-            raise ValueError(f"repeats must be at least 1, got {repeats}")
+            raise InputError(f"repeats must be at least 1, got {repeats}")
         self.adapter, self.repeats, self.cache = adapter, repeats, cache
         self.id = adapter.id
 
@@ -96,3 +97,9 @@ class RepeatingSUT:
         close = getattr(self.adapter, "close", None)
         if close:
             close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()

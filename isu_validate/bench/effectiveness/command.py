@@ -18,17 +18,12 @@ import sys
 import time
 from pathlib import Path
 
-from isu_validate.space import load_space
+from isu_validate.errors import InputError
 from isu_validate.search.algorithm_names import ALGORITHMS, algorithm_option, algorithms_option
-from isu_validate.search.surrogate_search import SurrogateSearch
-from isu_validate.bench.effectiveness.bound import KnownRiskSearch, risk_bank
-from isu_validate.bench.effectiveness.diagnosis import diagnose
-from isu_validate.bench.effectiveness.emulate import EmulatedSUT
-from isu_validate.bench.effectiveness.harness import simulate
-from isu_validate.bench.effectiveness.pipeline_runs import PipelineSettings, run_all
-from isu_validate.bench.effectiveness.summary import summarize
-from isu_validate.sut.planted import BENCHMARK_SUTS, make_benchmark_sut
-from isu_validate.bench.effectiveness.table import format_summary
+from isu_validate.sut.benchmark_names import BENCHMARK_SUTS
+
+# the harness (numpy, pymoo, scikit-learn) is imported by the functions that run the bench, so that
+# `bench effectiveness --help` and a mistyped option answer at once
 
 
 def register_bench(sub) -> None:
@@ -37,8 +32,10 @@ def register_bench(sub) -> None:
     p.add_argument("--suts", default=",".join(BENCHMARK_SUTS),
                    help=f"benchmark SUTs, comma-separated (default {','.join(BENCHMARK_SUTS)}; "
                         "random-spots-SEED draws other blind spots)")
-    p.add_argument("--algorithms", default=",".join(ALGORITHMS), type=algorithms_option, help=f"default {','.join(ALGORITHMS)}")
-    p.add_argument("--baseline", default="rs", type=algorithm_option, help="the algorithm the others are compared with (default rs)")
+    p.add_argument("--algorithms", default=",".join(ALGORITHMS), type=algorithms_option,
+                   help=f"default {','.join(ALGORITHMS)}")
+    p.add_argument("--baseline", default="rs", type=algorithm_option,
+                   help="the algorithm the others are compared with (default rs)")
     p.add_argument("--seeds", type=int, default=10, help="runs per algorithm, seeds 1..N (default 10)")
     p.add_argument("--budget", type=int, default=150, help="tests per run (default 150)")
     p.add_argument("--pop-size", type=int, default=15, help="tests per generation (default 15)")
@@ -77,22 +74,31 @@ def _names(text: str) -> list[str]:
 def _check(args) -> list[str]:
     algorithms = args.algorithms
     if args.seeds < 1 or args.budget < 1 or args.pop_size < 2:
-        raise ValueError("--seeds and --budget must be at least 1 and --pop-size at least 2")
+        raise InputError("--seeds and --budget must be at least 1 and --pop-size at least 2")
     if args.emulate and (args.pipeline or args.diagnose):
-        raise ValueError("--emulate runs the in-memory benchmark; leave out --pipeline and --diagnose")
+        raise InputError("--emulate runs the in-memory benchmark; leave out --pipeline and --diagnose")
     if args.bound is not None and (args.pipeline or args.diagnose):
-        raise ValueError("--bound runs in memory against a benchmark or emulated SUT; leave out --pipeline and --diagnose")
+        raise InputError("--bound runs in memory against a benchmark or emulated SUT; "
+                         "leave out --pipeline and --diagnose")
     if args.bound is not None and not (math.isfinite(args.bound) and args.bound >= 0):
-        raise ValueError(f"--bound takes an exponent >= 0 (e.g. 2 or 4), got {args.bound:g}")
+        raise InputError(f"--bound takes an exponent >= 0 (e.g. 2 or 4), got {args.bound:g}")
     if args.prior_tests and (args.pipeline or args.diagnose or args.prior_tests < 0):
-        raise ValueError("--prior-tests takes a number of tests >= 0 and runs in memory; leave out --pipeline "
+        raise InputError("--prior-tests takes a number of tests >= 0 and runs in memory; leave out --pipeline "
                          "and --diagnose (through the pipeline, use `run --learn-from`)")
     if args.pipeline and args.out is None:
-        raise ValueError("--pipeline writes run directories: give them a folder with --out (rerun it to resume)")
+        raise InputError("--pipeline writes run directories: give them a folder with --out (rerun it to resume)")
     return algorithms
 
 
 def cmd_bench_effectiveness(args) -> int:
+    from isu_validate.bench.effectiveness.diagnosis import diagnose
+    from isu_validate.bench.effectiveness.emulate import EmulatedSUT
+    from isu_validate.bench.effectiveness.harness import simulate
+    from isu_validate.bench.effectiveness.summary import summarize
+    from isu_validate.bench.effectiveness.table import format_summary
+    from isu_validate.space import load_space
+    from isu_validate.sut.planted import make_benchmark_sut
+
     algorithms = _check(args)
     space = load_space(args.space)
     seeds = list(range(1, args.seeds + 1))
@@ -131,6 +137,9 @@ PRIOR_SEED_OFFSET = 1000   # the earlier tests' random-search seeds: apart from 
 
 def _learner(algo: str, sut, args):
     """For --prior-tests: a surrogate that first learns from earlier random tests; else None."""
+    from isu_validate.bench.effectiveness.harness import simulate
+    from isu_validate.search.surrogate_search import SurrogateSearch
+
     if algo != SurrogateSearch.name or not args.prior_tests:
         return None
 
@@ -143,18 +152,26 @@ def _learner(algo: str, sut, args):
 
 def _with_bound(space, sut, summary, outcomes, seeds, args):
     """The summary again with the bound's runs, its risk taken at the goal's threshold (else the strictest)."""
+    from isu_validate.bench.effectiveness.bound import KnownRiskSearch, risk_bank
+    from isu_validate.bench.effectiveness.harness import simulate
+    from isu_validate.bench.effectiveness.summary import summarize
+
     threshold = summary.goal.get("threshold", min(summary.thresholds))
     bank = risk_bank(space, sut)
     risk = bank.risk(threshold)
     runs = [simulate(space, sut, KnownRiskSearch.name, seed, args.budget, args.pop_size,
                      make=lambda sp, pop, sd: KnownRiskSearch(sp, pop, sd, bank, risk, args.bound)) for seed in seeds]
-    description = (f"{summary.description}; bound: P(fail at {threshold:g})^{args.bound:g} over {len(bank.scenes)} random "
-                   f"scenes, P from {len(bank.fitness)} other noise draws (mean {risk.mean():.3f}): a reference, not a search")
+    description = (f"{summary.description}; bound: P(fail at {threshold:g})^{args.bound:g} "
+                   f"over {len(bank.scenes)} random scenes, P from {len(bank.fitness)} other noise draws "
+                   f"(mean {risk.mean():.3f}): a reference, not a search")
     return summarize(space, sut.name, description, outcomes + runs, args.baseline, args.clusters,
                      references=(KnownRiskSearch.name,))
 
 
 def _pipeline(args, space, algorithms, seeds):
+    from isu_validate.bench.effectiveness.pipeline_runs import PipelineSettings, run_all
+    from isu_validate.bench.effectiveness.summary import summarize
+    from isu_validate.bench.effectiveness.table import format_summary
     from isu_validate.execution import render_threads
 
     settings = PipelineSettings(out=args.out, sut=args.sut, space=args.space, algorithms=algorithms, seeds=seeds,

@@ -16,7 +16,6 @@ its figures are a tuning aid, not a measurement of the real SUT.
 """
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping
@@ -25,10 +24,10 @@ import numpy as np
 from sklearn.multioutput import ClassifierChain
 from sklearn.tree import DecisionTreeClassifier
 
-from isu_validate.archive import read_records
+from isu_validate.errors import InputError
 from isu_validate.evaluate.vqa import CORRECT, OCCLUDED, WRONG
 from isu_validate.space import SceneSpace
-from isu_validate.archive.run_file import ARCHIVE_FILE, RUN_FILE
+from isu_validate.archive.run_dir import ARCHIVE_FILE, RunDir, RunDirError
 from isu_validate.search.surrogate import SceneEncoder
 from isu_validate.sut.planted import scene_state, wrong_answer
 
@@ -58,7 +57,7 @@ class EmulatedSUT:
                     outputs.append((kind, feature.name))
                     columns.append(y)
         if not outputs:
-            raise ValueError("the stored runs hold no wrong or occluded answer: nothing to emulate "
+            raise InputError("the stored runs hold no wrong or occluded answer: nothing to emulate "
                              "(a SUT that is always right needs no search)")
         leaf = max(MIN_LEAF, int(MIN_LEAF_SHARE * len(records)))
         chain = ClassifierChain(DecisionTreeClassifier(min_samples_leaf=leaf, random_state=seed),
@@ -118,22 +117,23 @@ def _status(record, feature: str) -> str:
 def _stored_records(space: SceneSpace, run_dirs: list[Path]) -> list:
     records = []
     for folder in run_dirs:
-        if not (Path(folder) / ARCHIVE_FILE).exists():
-            raise ValueError(f"{folder}: not a run directory (no {ARCHIVE_FILE}); give finished runs of the SUT "
-                             "to emulate, e.g. --emulate runs/effect-reference/rs-s*")
-        for record in read_records(Path(folder) / ARCHIVE_FILE):
+        run_dir = RunDir(Path(folder))
+        if not run_dir.has_archive():
+            raise RunDirError(f"{folder}: not a run directory (no {ARCHIVE_FILE}); give finished runs of the SUT "
+                              "to emulate, e.g. --emulate runs/effect-reference/rs-s*")
+        for record in run_dir.records():
             if record.errored or record.primary is None:
                 continue
             if not ((record.details.get("verdict") or {}).get("features")):
-                raise ValueError(f"{folder}: test {record.test_id} has no per-feature verdict; only VQA runs "
+                raise InputError(f"{folder}: test {record.test_id} has no per-feature verdict; only VQA runs "
                                  "can be emulated")
             unknown = set(record.canonical) - set(space.features)
             if unknown:
-                raise ValueError(f"{folder}: its scenes have features {sorted(unknown)} that space "
+                raise InputError(f"{folder}: its scenes have features {sorted(unknown)} that space "
                                  f"{space.name!r} lacks; give the runs' space with --space")
             records.append(record)
     if not records:
-        raise ValueError(f"no test with a verdict in {', '.join(map(str, run_dirs))}: nothing to emulate")
+        raise InputError(f"no test with a verdict in {', '.join(map(str, run_dirs))}: nothing to emulate")
     return records
 
 
@@ -141,7 +141,7 @@ def _sut_name(run_dirs: list[Path]) -> str:
     names = set()
     for folder in run_dirs:
         try:
-            names.add(json.loads((Path(folder) / RUN_FILE).read_text())["config"]["pipeline"]["sut"])
+            names.add(RunDir(Path(folder)).info()["config"]["pipeline"]["sut"])
         except (OSError, KeyError, ValueError):
             names.add("stored SUT")
     return "+".join(sorted(names))

@@ -14,9 +14,10 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from isu_validate.archive import read_records
+from isu_validate.archive import RunDir
+from isu_validate.errors import InputError
 from isu_validate.pipeline import PipelineConfig
-from isu_validate.search.loop import ARCHIVE_FILE, RUN_FILE, RunConfig, RunError, run_search
+from isu_validate.search.loop import RunConfig, RunError, run_search
 from isu_validate.bench.effectiveness.harness import Outcome
 
 
@@ -49,9 +50,9 @@ def run_all(settings: PipelineSettings, log=print) -> list[Outcome]:
         folder = run_dir(settings, algo, seed)
         config = _config(settings, algo, seed, folder)
         try:
-            summary = run_search(config, resume=(folder / RUN_FILE).exists(), progress_stream=sys.stderr)
+            summary = run_search(config, resume=RunDir(folder).is_run(), progress_stream=sys.stderr)
         except RunError as exc:  # e.g. other settings than the stored runs: never measure them silently
-            raise ValueError(f"{exc} (bench effectiveness --pipeline resumes the runs in {settings.out}: "
+            raise InputError(f"{exc} (bench effectiveness --pipeline resumes the runs in {settings.out}: "
                              "rerun it with their settings, or give another --out)") from None
         log(f"[{number}/{len(jobs)}] {algo} seed {seed}: {summary.tests} tests ({summary.evaluated_now} evaluated "
             f"now), {summary.failures} failing, {summary.errors} with errors -> {folder}")
@@ -69,4 +70,4 @@ def _config(settings: PipelineSettings, algorithm: str, seed: int, folder: Path)
 
 def read_outcome(folder: Path, algorithm: str, seed: int, sut: str) -> Outcome:
     """A finished run directory as an ``Outcome`` (the search's own time is not stored: None)."""
-    return Outcome(algorithm, seed, sut, read_records(folder / ARCHIVE_FILE), search_s=None)
+    return Outcome(algorithm, seed, sut, RunDir(folder).records(), search_s=None)

@@ -133,8 +133,8 @@ def _per_run(items: list, clustering, runs: dict[str, int]) -> dict[str, dict[st
     out = {}
     for algo, n in runs.items():
         labels = [[c for (a, i, _), c in zip(items, clustering.labels) if a == algo and i == r] for r in range(n)]
-        out[algo] = {"coverage": [coverage(l, clustering.k) for l in labels],
-                     "entropy": [normalised_entropy(l, clustering.k) for l in labels]}
+        out[algo] = {"coverage": [coverage(run_labels, clustering.k) for run_labels in labels],
+                     "entropy": [normalised_entropy(run_labels, clustering.k) for run_labels in labels]}
     return out
 
 

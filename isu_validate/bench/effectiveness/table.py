@@ -46,7 +46,8 @@ def format_summary(s: SutSummary) -> str:
         for algo in s.algorithms:
             d = s.diversity.get(algo)
             if d:
-                lines.append(f"    {algo:>10}  coverage {_num(d['coverage mean'], '.2f')} ± {_num(d['coverage std'], '.2f')}"
+                lines.append(f"    {algo:>10}  coverage {_num(d['coverage mean'], '.2f')} "
+                             f"± {_num(d['coverage std'], '.2f')}"
                              f"   entropy {_num(d['entropy mean'], '.3f')} ± {_num(d['entropy std'], '.3f')}")
         for t in s.diversity_tests:
             lines.append(f"    {t['algorithm']} vs {s.baseline} {t['measure']}: p {_num(t['p'], '.2g')}, "

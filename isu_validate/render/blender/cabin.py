@@ -42,9 +42,12 @@ def build_cabin(rig: dict, coll) -> dict:
         y = side * (hw + 0.02)
         parts += [
             M.box(f"door_{side}", (xmid, y, belt / 2), (length, 0.04, belt), trim, coll, cab),
-            M.box(f"sill_{side}", (xmid, side * (hw - 0.05), belt - 0.02), (length - 0.3, 0.1, 0.04), plastic, coll, cab),
-            M.box(f"b_pillar_{side}", (-0.32, side * hw, (belt + roof) / 2), (0.12, 0.06, roof - belt), trim, coll, cab),
-            M.box(f"c_pillar_{side}", (xr + 0.12, side * hw, (belt + roof) / 2), (0.24, 0.06, roof - belt), trim, coll, cab),
+            M.box(f"sill_{side}", (xmid, side * (hw - 0.05), belt - 0.02), (length - 0.3, 0.1, 0.04),
+                  plastic, coll, cab),
+            M.box(f"b_pillar_{side}", (-0.32, side * hw, (belt + roof) / 2), (0.12, 0.06, roof - belt),
+                  trim, coll, cab),
+            M.box(f"c_pillar_{side}", (xr + 0.12, side * hw, (belt + roof) / 2), (0.24, 0.06, roof - belt),
+                  trim, coll, cab),
             _pillar(f"a_pillar_{side}", Vector((xf, side * hw, s["dashboard_top"])),
                     Vector((roof_front, side * (hw - 0.03), roof)), trim, coll, cab),
         ]

@@ -95,15 +95,6 @@ def unit_cylinder(segments: int = 20, cap: bool = True) -> bpy.types.Mesh:
     return _cached(f"u_cyl_{segments}_{cap}", build)
 
 
-def unit_capsule(segments: int = 20) -> bpy.types.Mesh:
-    """A capsule of radius 1 from z = 0 to z = 1 with hemispherical ends of radius 1 (scale x/y only
-    keeps the ends round when the length is scaled separately: see ``place_capsule``)."""
-    def build(bm):
-        bmesh.ops.create_uvsphere(bm, u_segments=segments, v_segments=12, radius=1.0)
-        _smooth(bm)
-    return _cached(f"u_caps_{segments}", build)
-
-
 def unit_torus(major: float = 1.0, minor: float = 0.1, segments: int = 40) -> bpy.types.Mesh:
     """A torus in the xy plane."""
     def build(bm):
@@ -169,14 +160,6 @@ def segment_matrix(p0, p1, rx: float, ry: float | None = None, twist=None) -> Ma
 
 def place_segment(obj, p0, p1, rx: float, ry: float | None = None) -> None:
     obj.matrix_world = segment_matrix(p0, p1, rx, ry)
-
-
-def place_capsule(obj, p0, p1, r: float) -> None:
-    """A stretched sphere between p0 and p1 (limb segment with round ends)."""
-    p0, p1 = Vector(p0), Vector(p1)
-    mid, axis = (p0 + p1) / 2, p1 - p0
-    rot = axis.to_track_quat("Z", "Y").to_matrix().to_4x4()
-    obj.matrix_world = Matrix.Translation(mid) @ rot @ Matrix.Diagonal((r, r, axis.length / 2 + r, 1.0))
 
 
 def ribbon_mesh(name: str, points, widths, normals, thickness: float = 0.004) -> bpy.types.Mesh:

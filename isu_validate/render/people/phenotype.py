@@ -19,7 +19,8 @@ BMI_TARGET = {"W1": 19.0, "W2": 23.0, "W3": 27.5, "W4": 32.0}
 WEIGHT_WORDS = {"W1": "slim", "W2": "average build", "W3": "overweight", "W4": "obese"}
 GENDER = {"MALE": 0.0, "FEMALE": 1.0}
 ADULT_AGE = 0.792          # anny's age input for 35 years (MorphologicalAgeMapping)
-# children (anny.shape_distribution.MorphologicalAgeMapping): 1 year -> 0.05 (0.78 m, 7.3 kg), 2.5 years -> 0.1325 (0.93 m)
+# children (anny.shape_distribution.MorphologicalAgeMapping): 1 year -> 0.05 (0.78 m, 7.3 kg),
+# 2.5 years -> 0.1325 (0.93 m)
 CHILD_AGE = {"REAR_FACING": 0.05, "FRONT_FACING": 0.1325}
 PROPORTIONS = 0.5
 
@@ -34,14 +35,22 @@ HEIGHT_INPUT = {
     ('FEMALE', 'H1'): 0.3038, ('FEMALE', 'H2'): 0.3956, ('FEMALE', 'H3'): 0.4873, ('FEMALE', 'H4'): 0.5791,
 }
 BUILD_INPUT = {
-    ('MALE', 'H1', 'W1'): 0.8734, ('MALE', 'H1', 'W2'): 1.7947, ('MALE', 'H1', 'W3'): 2.2386, ('MALE', 'H1', 'W4'): 2.5022,
-    ('MALE', 'H2', 'W1'): 0.8307, ('MALE', 'H2', 'W2'): 1.7462, ('MALE', 'H2', 'W3'): 2.235, ('MALE', 'H2', 'W4'): 2.5076,
-    ('MALE', 'H3', 'W1'): 0.7819, ('MALE', 'H3', 'W2'): 1.6871, ('MALE', 'H3', 'W3'): 2.2281, ('MALE', 'H3', 'W4'): 2.5096,
-    ('MALE', 'H4', 'W1'): 0.7275, ('MALE', 'H4', 'W2'): 1.6178, ('MALE', 'H4', 'W3'): 2.2182, ('MALE', 'H4', 'W4'): 2.5084,
-    ('FEMALE', 'H1', 'W1'): 1.5195, ('FEMALE', 'H1', 'W2'): 2.1536, ('FEMALE', 'H1', 'W3'): 2.5395, ('FEMALE', 'H1', 'W4'): 2.8949,
-    ('FEMALE', 'H2', 'W1'): 1.4752, ('FEMALE', 'H2', 'W2'): 2.1355, ('FEMALE', 'H2', 'W3'): 2.5341, ('FEMALE', 'H2', 'W4'): 2.9007,
-    ('FEMALE', 'H3', 'W1'): 1.4241, ('FEMALE', 'H3', 'W2'): 2.1135, ('FEMALE', 'H3', 'W3'): 2.5243, ('FEMALE', 'H3', 'W4'): 2.9018,
-    ('FEMALE', 'H4', 'W1'): 1.3631, ('FEMALE', 'H4', 'W2'): 2.0877, ('FEMALE', 'H4', 'W3'): 2.5105, ('FEMALE', 'H4', 'W4'): 2.8986,
+    ('MALE', 'H1', 'W1'): 0.8734, ('MALE', 'H1', 'W2'): 1.7947,
+    ('MALE', 'H1', 'W3'): 2.2386, ('MALE', 'H1', 'W4'): 2.5022,
+    ('MALE', 'H2', 'W1'): 0.8307, ('MALE', 'H2', 'W2'): 1.7462,
+    ('MALE', 'H2', 'W3'): 2.235, ('MALE', 'H2', 'W4'): 2.5076,
+    ('MALE', 'H3', 'W1'): 0.7819, ('MALE', 'H3', 'W2'): 1.6871,
+    ('MALE', 'H3', 'W3'): 2.2281, ('MALE', 'H3', 'W4'): 2.5096,
+    ('MALE', 'H4', 'W1'): 0.7275, ('MALE', 'H4', 'W2'): 1.6178,
+    ('MALE', 'H4', 'W3'): 2.2182, ('MALE', 'H4', 'W4'): 2.5084,
+    ('FEMALE', 'H1', 'W1'): 1.5195, ('FEMALE', 'H1', 'W2'): 2.1536,
+    ('FEMALE', 'H1', 'W3'): 2.5395, ('FEMALE', 'H1', 'W4'): 2.8949,
+    ('FEMALE', 'H2', 'W1'): 1.4752, ('FEMALE', 'H2', 'W2'): 2.1355,
+    ('FEMALE', 'H2', 'W3'): 2.5341, ('FEMALE', 'H2', 'W4'): 2.9007,
+    ('FEMALE', 'H3', 'W1'): 1.4241, ('FEMALE', 'H3', 'W2'): 2.1135,
+    ('FEMALE', 'H3', 'W3'): 2.5243, ('FEMALE', 'H3', 'W4'): 2.9018,
+    ('FEMALE', 'H4', 'W1'): 1.3631, ('FEMALE', 'H4', 'W2'): 2.0877,
+    ('FEMALE', 'H4', 'W3'): 2.5105, ('FEMALE', 'H4', 'W4'): 2.8986,
 }
 
 
@@ -105,9 +114,9 @@ def calibrate(model) -> tuple[dict, dict]:
         for h, band in HEIGHT_BANDS.items():
             target = sum(band) / 2
             heights[(gender, h)] = _bisect(
-                lambda x: measure(model, Phenotype(g, ADULT_AGE, x, 0.5, 0.5))["height_m"], target, 0.0, 1.0)
+                lambda x, g=g: measure(model, Phenotype(g, ADULT_AGE, x, 0.5, 0.5))["height_m"], target, 0.0, 1.0)
             for w, bmi in BMI_TARGET.items():
-                def bmi_at(s):
+                def bmi_at(s, g=g, gender=gender, h=h):
                     weight, muscle = build_inputs(s)
                     return measure(model, Phenotype(g, ADULT_AGE, heights[(gender, h)], weight, muscle))["bmi"]
                 builds[(gender, h, w)] = _bisect(bmi_at, bmi, 0.0, 3.0)
@@ -128,7 +137,8 @@ def describe_texts(table: dict) -> dict:
         out["driver_height"][h] = f"{lo:.2f}-{hi:.2f} m tall (rendered {min(rendered):.2f} m)"
     for w, (lo, hi) in BMI_BANDS.items():
         masses = [v["mass_kg"] for (g, h, ww), v in table.items() if ww == w]
-        band = f"BMI under {hi:.0f}" if w == "W1" else f"BMI {lo:.0f} and over" if w == "W4" else f"BMI {lo:.0f}-{hi:.0f}"
+        band = (f"BMI under {hi:.0f}" if w == "W1" else f"BMI {lo:.0f} and over" if w == "W4"
+                else f"BMI {lo:.0f}-{hi:.0f}")
         out["driver_weight"][w] = (f"{WEIGHT_WORDS[w]}, {band} ({min(masses):.0f}-{max(masses):.0f} kg at 1.55-1.85 m)")
     return out
 

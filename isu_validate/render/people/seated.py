@@ -1,5 +1,6 @@
 """The driver's pose in the cabin rig: seated on the driver's seat (resting on the cushion and the
-backrest, clear of both; the seat slid on its track until the wheel is in reach), feet towards the pedals, hands on the steering wheel at ten and two, or
+backrest, clear of both; the seat slid on its track until the wheel is in reach),
+feet towards the pedals, hands on the steering wheel at ten and two, or
 one hand holding the phone at one of the rig's phone positions P1-P10 (reached by inverse kinematics,
 the phone placed in the posed palm).
 

@@ -12,12 +12,12 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import tempfile
 from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
 
+from ...atomic import atomic_open
 from .model import anny_cache_dir, anny_version
 
 # bump when posing, regions, hair, belt or expressions change what an entry holds
@@ -61,15 +61,8 @@ class PeopleStore:
 
     def put(self, kind: str, key: str, arrays: dict) -> Path:
         path = self.path(kind, key)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-", suffix=".npz")
-        try:
-            with os.fdopen(fd, "wb") as f:
-                np.savez(f, **arrays)
-            os.replace(tmp, path)     # atomic: a reader never sees half an entry
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
+        with atomic_open(path, "wb") as f:   # a reader never sees half an entry
+            np.savez(f, **arrays)
         return path
 
     def load(self, kind: str, key: str) -> dict | None:

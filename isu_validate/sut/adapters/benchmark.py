@@ -13,6 +13,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from ...archive.run_dir import RunDir
 from ...protocols import SUTRequest
 from ..errors import SUTConfigError
 from ..exchange import Exchange
@@ -36,7 +37,7 @@ class BenchmarkAdapter:
     def send(self, request: SUTRequest) -> Exchange:
         start = time.perf_counter()
         image = Path(request.image)
-        label = image.parent.parent / "labels" / f"{image.stem}.json"
+        label = RunDir(image.parent.parent).label_file(image.stem)   # the run's images/ and labels/
         if request.mode != "vqa":
             return Exchange(error=f"{self.id} answers questions only (mode vqa), not {request.mode!r}")
         try:

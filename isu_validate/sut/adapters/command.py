@@ -50,11 +50,13 @@ class CommandAdapter:
         self.id = f"command:{shlex.join(self.argv)}"
         self.fingerprint = fingerprint("command", self.id, {})
         # The program's environment may hold keys; anything it echoes from there is masked.
-        self.redact = Redactor(v for k, v in os.environ.items() if any(s in k.upper() for s in ("KEY", "TOKEN", "SECRET")))
+        self.redact = Redactor(v for k, v in os.environ.items()
+                               if any(s in k.upper() for s in ("KEY", "TOKEN", "SECRET")))
 
     @staticmethod
     def message(request: SUTRequest) -> dict[str, Any]:
-        msg: dict[str, Any] = {"mode": request.mode, "image": str(Path(request.image).resolve()), "prompt": request.prompt}
+        msg: dict[str, Any] = {"mode": request.mode, "image": str(Path(request.image).resolve()),
+                               "prompt": request.prompt}
         if request.mode == "vqa":
             msg["questions"] = [q.to_dict() for q in request.questions]
         return msg

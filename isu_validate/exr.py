@@ -1,5 +1,8 @@
 """Read and write uncompressed scanline OpenEXR files (enough for Blender's multilayer render output).
 
+The renderer writes its linear passes in it (``render/outputs.py``); the camera model reads them back
+(``exposure apply``, ``exposure fit --sim``, ``exposure colour --sim X.exr``). A leaf: imports numpy only.
+
 Why our own: neither OpenCV nor imageio read Blender's multilayer EXR, and the worker writes its passes
 uncompressed (compression would cost more than the disk traffic it saves on a local temp file)."""
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Replays a recorded V4L2 device session through ``cv2.VideoCapture``'s interface.
+"""Test double: replays a recorded V4L2 device session through ``cv2.VideoCapture``'s interface.
 
 A device recording (``device.json`` plus frame PNGs) holds what a real camera did: its
 control values and ranges (as ``v4l2-ctl --list-ctrls`` reports them), the frames it
