@@ -7,6 +7,8 @@ One module per concept:
 
 - ``sources/``: the frame-source interface and its V4L2, DepthAI, replay and stand-in implementations
   (``open_source(spec)``); ``discovery``: ``capture list``; ``session``: ``capture shoot``.
+- ``sidecar``: the one reader of a frame's sidecar, and of whether the frame is a stand-in render
+  (``provenance``: how many frames taken for reality are stand-ins; ``banner``: the line that says so).
 - ``board``: ChArUco board specs and detection (OpenCV 4.14's new ArUco API).
 - ``camera``: the camera (``Camera``) and the one reader/writer of the camera file, the contract
   that calibration writes and the renderer renders through (TOML, JSON); ``mrcal_file``: mrcal's

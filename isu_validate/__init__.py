@@ -15,6 +15,8 @@ The public API is a handful of functions, each the one its command calls::
 - SUT: ``open_sut``, ``build_request``; judge: ``make_judge``
 - search: ``run_search`` with ``RunConfig`` and ``PipelineConfig``; ``tests_table``; ``report``
 - sim-to-real (RQ3): ``plan_recreation`` (pairs and sheets), ``measure_agreement`` with ``AgreeSettings``
+- training data: ``build_dataset`` with ``DatasetSettings`` (images, truth, COCO masks, VQA chats)
+- regression replay: ``replay_run`` with ``ReplaySettings`` (a new SUT on a run's stored images)
 
 Names load on first use (PEP 562), so ``import isu_validate`` stays fast and imports neither
 Blender, torch, scikit-learn, pandas, OpenCV nor pymoo. Each name's docstring has an example.
@@ -41,6 +43,10 @@ _API = {
     "plan_recreation": "isu_validate.recreate",
     "measure_agreement": "isu_validate.agree",
     "AgreeSettings": "isu_validate.agree",
+    "build_dataset": "isu_validate.dataset",
+    "DatasetSettings": "isu_validate.dataset",
+    "replay_run": "isu_validate.replay",
+    "ReplaySettings": "isu_validate.replay",
 }
 __all__ = sorted(_API)
 

@@ -32,7 +32,9 @@ COMMANDS = {
     "calibrate": ("calibrate", "calibrate a camera from ChArUco images (also: diff, register)"),
     "recreate": ("recreate", "pick tests to recreate in a real car; write pairs and recreation sheets"),
     "agree": ("agree", "per-feature sim/real agreement report (or: agree votes, validity votes)"),
+    "replay": ("replay", "ask a new SUT about a run's stored images; fixed and new failures"),
     "exposure": ("exposure", "camera exposure, response, noise and colour: fit, apply, check"),
+    "dataset": ("dataset", "render a training dataset: images, truth, COCO masks, VQA chats"),
 }
 
 __all__ = ["COMMANDS", "UserError", "build_parser", "main"]

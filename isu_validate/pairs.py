@@ -10,7 +10,10 @@ Layout (a contract, ARCHITECTURE.md)::
     PAIRS/<sample>/sim.label.json the renderer's label beside it (visible parts), when the run kept one
     PAIRS/<sample>/camera.toml    the camera rig the render used
     PAIRS/<sample>/sheet.html     the recreation sheet
-    PAIRS/<sample>/real/*.png     captured frames, each with a .json sidecar (device, exposure, ISO/gain, time)
+    PAIRS/<sample>/sheet.png      the scene rendered for the sheet (standard preset, 640 px wide or more),
+                                  with its render label sheet.label.json; not a role: sim.png is what the SUT saw
+    PAIRS/<sample>/real/*.png     captured frames, each with a .json sidecar (device, exposure, ISO/gain, time;
+                                  ``"stand_in": true`` on a stand-in render: ``Sample.provenance``)
     PAIRS/<sample>/align/*.png    the alignment aid of each real frame (render edges and ghost over the frame)
     PAIRS/<sample>/nst.png        the render after style transfer (``stylize --pairs``)
     PAIRS/<sample>/votes.json     validity votes: {"votes": {annotator: {"same": bool, "at": time}}}
@@ -26,6 +29,8 @@ import shutil
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+
+from capture.sidecar import Provenance, provenance, read_sidecar
 
 from .atomic import write_text
 from .errors import UserError
@@ -72,6 +77,11 @@ class Sample:
         return self.path / "sheet.html"
 
     @property
+    def sheet_image(self) -> Path:
+        """The scene rendered for printing (``recreate``); sim.png stays the run's frame."""
+        return self.path / "sheet.png"
+
+    @property
     def real_dir(self) -> Path:
         return self.path / "real"
 
@@ -103,10 +113,11 @@ class Sample:
     @staticmethod
     def sidecar(frame: Path) -> dict:
         """A real frame's sidecar ({} when it has none or it cannot be read)."""
-        try:
-            return json.loads(frame.with_suffix(".json").read_text())
-        except (OSError, ValueError):
-            return {}
+        return read_sidecar(frame)
+
+    def provenance(self) -> Provenance:
+        """The real frames split into stand-ins and real captures (their sidecars say which)."""
+        return provenance(self.real_frames())
 
     def next_frame_index(self) -> int:
         """The number the next captured frame gets (``frame_0003.png`` after three)."""
@@ -133,8 +144,8 @@ class Sample:
 
     def scene(self) -> dict:
         """The scene's feature values (a run's label holds them under ``scene``; a bare scene file is the scene)."""
-        label = self.label()
-        return label["scene"] if isinstance(label.get("scene"), dict) else label
+        from .space.scene_file import scene_of   # lazily: the space package costs its numpy
+        return scene_of(self.label())
 
     def render_label(self) -> dict:
         try:

@@ -23,6 +23,8 @@ from .space import SceneSpace, load_space
 from .config import PipelineConfig   # defined in a light module (the CLI shows its defaults)
 from .errors import InputError
 
+DEFAULT_FACTORY = PipelineConfig.factory   # the real renderer, SUT and judge
+
 
 @dataclass
 class Job:
@@ -50,19 +52,38 @@ def build_components(config: PipelineConfig, space: SceneSpace) -> Components:
     from functools import partial
 
     from .evaluate import make_judge
-    from .render import open_renderer
     from .sut import build_request, open_sut
 
     run_dir = Path(config.run_dir)
-    renderer = open_renderer(preset=config.preset, camera=config.camera, cabin=config.cabin,
-                             channels=config.channels, cache_dir=run_dir / "cache" / "render",
-                             log_dir=run_dir / "logs", space=space, threads=config.render_threads,
-                             extrinsics_from=config.extrinsics_from, min_visible=config.min_visible)
+    renderer = build_renderer(config, space)
     sut = open_sut(config.sut, space=space, repeats=config.repeats, cache_dir=run_dir / "cache" / "sut",
                    timeout_s=config.sut_timeout_s, **config.sut_options)
     options = {"template": config.caption_template} if config.mode == "vc" else {}
     judge = make_judge(config.mode, space, threshold=config.threshold, **options)
     return Components(renderer, sut, judge, partial(build_request, style=config.prompt_style))
+
+
+def build_renderer(config: PipelineConfig, space: SceneSpace):
+    """The real renderer with a run's render settings (its render cache and Blender logs in ``config.run_dir``)."""
+    from .render import open_renderer
+
+    run_dir = Path(config.run_dir)
+    return open_renderer(preset=config.preset, camera=config.camera, cabin=config.cabin,
+                         channels=config.channels, cache_dir=run_dir / "cache" / "render",
+                         log_dir=run_dir / "logs", space=space, threads=config.render_threads,
+                         extrinsics_from=config.extrinsics_from, min_visible=config.min_visible)
+
+
+def open_run_renderer(config: PipelineConfig, space: SceneSpace):
+    """The renderer a run's tests were rendered with (``replay`` re-renders a missing frame with it): the real
+    one, or the one of the run's own pipeline factory (``--pipeline-factory``), whose SUT is closed unused."""
+    if config.factory == DEFAULT_FACTORY:
+        return build_renderer(config, space)
+    parts = _load_factory(config.factory)(config, space)
+    close = getattr(parts.sut, "close", None)
+    if close:
+        close()
+    return parts.renderer
 
 
 def check_render_settings(config: PipelineConfig, space: SceneSpace) -> None:

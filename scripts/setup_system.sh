@@ -2,7 +2,7 @@
 # System packages isu-validate needs, installed through Debian's apt when missing.
 # - libraries bpy links against (X11 client libs, GL)
 # - WordNet 3.0 for METEOR (copied into nltk_data by `python -m isu_validate.setup_data`)
-# - chromium for the report's browser test
+# - chromium for the report's browser test and the recreation sheets' print test
 set -euo pipefail
 PKGS=(libx11-6 libxrender1 libxfixes3 libxi6 libxkbcommon0 libxext6 libxcb1 libsm6 libice6 libxt6 libgl1
       wordnet-base wordnet-sense-index chromium)

@@ -1,4 +1,4 @@
-"""Training and applying the feed-forward style network for one real style image.
+"""Training and applying the feed-forward style network for one real style image or a style set.
 
 Training (Johnson et al. 2016) minimises the Gatys content and style losses of the network's
 output over crops of many renders, so afterwards one forward pass stylises a frame.
@@ -6,20 +6,21 @@ Training checkpoints every few steps and resumes from the checkpoint when interr
 """
 from __future__ import annotations
 
-import hashlib
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Callable, Sequence
 
 import torch
+import torch.nn.functional as F
 
 from isu_validate.atomic import atomic_path
 from isu_validate.errors import InputError, InputNotFound
 
 from .fast_net import FastNetConfig, FastStyleNet
 from .imageio import load_image
-from .losses import content_loss, gram, style_loss, tv_loss
+from .losses import content_loss, style_loss, tv_loss
+from .style_set import file_sha256, fingerprint, load_style_grams
 from .vgg import VGG19, preprocess
 
 FORMAT = "isu-validate-fast-style/1"
@@ -51,10 +52,6 @@ class TrainReport:
     losses: list[float]
 
 
-def _file_sha256(path: Path) -> str:
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
-
-
 class CropSampler:
     """Seeded random crops from renders held in memory at a small size."""
 
@@ -84,17 +81,18 @@ class CropSampler:
         return torch.cat(crops).clamp(0, 1)
 
 
-def train_fast(style_path: Path, content_paths: Sequence[Path], out: Path, cfg: FastTrainConfig = FastTrainConfig(),
-               resume: bool = True, progress: Callable[[int, int, float], None] | None = None) -> TrainReport:
-    """Train a network for ``style_path`` on crops of ``content_paths``; write it to ``out``."""
+def train_fast(style_path: Path | Sequence[Path], content_paths: Sequence[Path], out: Path,
+               cfg: FastTrainConfig = FastTrainConfig(), resume: bool = True,
+               progress: Callable[[int, int, float], None] | None = None) -> TrainReport:
+    """Train a network for ``style_path`` (one photo, or a style set: their mean Grams) on crops of
+    ``content_paths``; write it to ``out``."""
+    styles = [Path(style_path)] if isinstance(style_path, (str, Path)) else [Path(p) for p in style_path]
     torch.manual_seed(cfg.seed)
     vgg = VGG19(cfg.pooling)
     net = FastStyleNet(cfg.net)
     opt = torch.optim.Adam(net.parameters(), lr=cfg.lr)
     sampler = CropSampler(content_paths, cfg.crop, cfg.seed)
-    with torch.no_grad():
-        style = load_image(style_path, cfg.style_size)
-        style_grams = {k: gram(v) for k, v in vgg(preprocess(style), cfg.style_layers).items()}
+    style_grams = load_style_grams(vgg, styles, cfg.style_size, cfg.style_layers)
     ckpt = Path(str(out) + ".ckpt")
     step, losses = _resume(ckpt, net, opt, sampler) if resume and ckpt.exists() else (0, [])
     start = time.perf_counter()
@@ -120,11 +118,20 @@ def train_fast(style_path: Path, content_paths: Sequence[Path], out: Path, cfg: 
             _atomic_save({"step": step, "losses": losses, "net": net.state_dict(), "opt": opt.state_dict(),
                           "rng": sampler.gen.get_state()}, ckpt)
     net.eval()
-    meta = {"style": str(style_path), "style_sha256": _file_sha256(style_path), "content_images": len(content_paths),
+    meta = {**_style_meta(styles), "content_images": len(content_paths),
             "steps_done": step, "final_loss": losses[-1] if losses else None, "train": _plain(asdict(cfg))}
     save_model(net, out, meta)
     ckpt.unlink(missing_ok=True)
     return TrainReport(step, losses[-1] if losses else float("nan"), time.perf_counter() - start, losses)
+
+
+def _style_meta(styles: list[Path]) -> dict:
+    # "style"/"style_sha256" name the one photo (what `stylize --model --style` checks); a set has several
+    meta = {"styles": [str(p) for p in styles], "style_sha256s": [file_sha256(p) for p in styles],
+            "style_set_sha256": fingerprint(styles)}
+    if len(styles) == 1:
+        meta |= {"style": str(styles[0]), "style_sha256": meta["style_sha256s"][0]}
+    return meta
 
 
 def _resume(ckpt: Path, net, opt, sampler) -> tuple[int, list[float]]:
@@ -165,7 +172,14 @@ def load_model(path: Path) -> tuple[FastStyleNet, dict]:
     return net.eval(), state["meta"]
 
 
-def stylize_fast(net: FastStyleNet, image: torch.Tensor, seed: int = 0) -> torch.Tensor:
-    """One forward pass at the image's own size: (1, 3, H, W) 0..1 in and out; ``seed`` fixes the noise."""
+def stylize_fast(net: FastStyleNet, image: torch.Tensor, seed: int = 0, size: int | None = None) -> torch.Tensor:
+    """One forward pass: (1, 3, H, W) 0..1 in and out; ``seed`` fixes the noise. With ``size`` the net runs
+    at that longer side (the scale it was trained at) and its change, upsampled, is added to the image:
+    the look changes as trained while the scene's fine detail passes through untouched."""
     with torch.inference_mode():
-        return net(image, seed)
+        if not size or max(image.shape[-2:]) <= size:
+            return net(image, seed)
+        scale = size / max(image.shape[-2:])
+        small = F.interpolate(image, scale_factor=scale, mode="bilinear", antialias=True, align_corners=False)
+        change = net(small, seed) - small
+        return (image + F.interpolate(change, size=image.shape[-2:], mode="bilinear", align_corners=False)).clamp(0, 1)

@@ -7,18 +7,21 @@ from __future__ import annotations
 
 import time
 from dataclasses import asdict, dataclass, field
-from typing import Callable
+from typing import Callable, Mapping, Sequence, Union
 
 import torch
 
 from isu_validate.errors import InputError
 
 from .colour import preserve_colour
-from .losses import content_loss, gram, style_loss, tv_loss
+from .losses import content_loss, style_loss, tv_loss
+from .style_set import mean_grams
 from .vgg import VGG19, preprocess
 
 STYLE_LAYERS = ("relu1_1", "relu2_1", "relu3_1", "relu4_1", "relu5_1")
 CONTENT_LAYERS = ("relu4_2",)
+# one style image, a style set's images, or their mean Grams (layer -> (1, C, C))
+Style = Union[torch.Tensor, Sequence[torch.Tensor], Mapping[str, torch.Tensor]]
 
 
 @dataclass(frozen=True)
@@ -58,14 +61,16 @@ class GatysResult:
 
 
 class GatysObjective:
-    """Loss of a candidate image against fixed content activations and style Gram matrices."""
+    """Loss of a candidate image against fixed content activations and style Gram matrices: of one
+    style image, the mean Grams of several (see ``style_set``), or such Grams computed once already
+    (a mapping layer -> Gram: a style set styling many images pays for its photos once)."""
 
-    def __init__(self, vgg: VGG19, content: torch.Tensor, style: torch.Tensor, cfg: GatysConfig):
+    def __init__(self, vgg: VGG19, content: torch.Tensor, style: Style, cfg: GatysConfig):
         self.vgg, self.cfg = vgg, cfg
         self.layers = set(cfg.content_layers) | set(cfg.style_layers)
         with torch.no_grad():
             self.content_targets = vgg(preprocess(content), cfg.content_layers)
-            self.style_grams = {k: gram(v) for k, v in vgg(preprocess(style), cfg.style_layers).items()}
+        self.style_grams = _style_grams(vgg, style, cfg.style_layers)
 
     def __call__(self, x: torch.Tensor) -> torch.Tensor:
         feats = self.vgg(preprocess(x), self.layers)
@@ -76,9 +81,10 @@ class GatysObjective:
         return loss
 
 
-def stylize_gatys(content: torch.Tensor, style: torch.Tensor, cfg: GatysConfig = GatysConfig(),
+def stylize_gatys(content: torch.Tensor, style: Style, cfg: GatysConfig = GatysConfig(),
                   vgg: VGG19 | None = None, progress: Callable[[int, float], None] | None = None) -> GatysResult:
-    """Stylise ``content`` (1, 3, H, W in 0..1, already at the working size) with ``style``."""
+    """Stylise ``content`` (1, 3, H, W in 0..1, already at the working size) with ``style`` (one image,
+    a style set's images, or their mean Grams)."""
     cfg.check()
     vgg = vgg or VGG19(cfg.pooling)
     start = time.perf_counter()
@@ -113,6 +119,15 @@ def stylize_gatys(content: torch.Tensor, style: torch.Tensor, cfg: GatysConfig =
     if cfg.preserve_colour:
         out = preserve_colour(out, content)
     return GatysResult(out, losses, time.perf_counter() - start, asdict(cfg))
+
+
+def _style_grams(vgg: VGG19, style: Style, layers: Sequence[str]) -> dict[str, torch.Tensor]:
+    if isinstance(style, Mapping):
+        missing = sorted(set(layers) - set(style))
+        if missing:
+            raise InputError(f"the style Grams lack the layers {missing}; compute them for {list(layers)}")
+        return {layer: style[layer] for layer in layers}
+    return mean_grams(vgg, [style] if isinstance(style, torch.Tensor) else list(style), layers)
 
 
 def _initial(content: torch.Tensor, cfg: GatysConfig) -> torch.Tensor:

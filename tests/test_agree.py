@@ -173,6 +173,7 @@ def test_every_number_of_the_summary_by_hand(setup, tmp_path, capsys):
     assert (s["both_correct"], s["both_wrong"], s["sim_only"], s["real_only"]) == (3, 1, 4, 1)
     assert s["n_features_compared"] == 9 and s["agreement_rate"] == pytest.approx(4 / 9)
     assert s["n_samples"] == 2 and s["n_frames"] == 3
+    assert (s["stand_in_frames"], s["real_frames"]) == (3, 0)   # every "photo" here is a stand-in render
     assert s["not_compared"] == {"occluded": 1, "unanswered": 1, "sut_error": 3}   # S04's frame: 3 features
     pf = s["per_feature"]
     assert pf["driver_gender"]["compared"] == 3 and pf["driver_gender"]["agreement_rate"] == pytest.approx(1 / 3)
@@ -206,10 +207,11 @@ def test_every_number_of_the_summary_by_hand(setup, tmp_path, capsys):
                      "S02: the SUT did not answer luggage"):
         assert expected in problems, expected
     rows = list(csv.DictReader((out / "agreement.csv").open()))
-    assert list(rows[0]) == ["sample", "frame", "feature", "truth", "sim", "real", "category", "nst", "nst_category"]
+    assert list(rows[0]) == ["sample", "frame", "feature", "truth", "sim", "real", "category", "nst", "nst_category",
+                             "stand_in"]
     row = next(r for r in rows if r["sample"] == "S01" and r["frame"] == "frame_0000.png" and r["feature"] == "luggage")
     assert row == {"sample": "S01", "frame": "frame_0000.png", "feature": "luggage", "truth": "YES", "sim": "YES",
-                   "real": "NO", "category": "sim_only", "nst": "NO", "nst_category": "both_wrong"}
+                   "real": "NO", "category": "sim_only", "nst": "NO", "nst_category": "both_wrong", "stand_in": "True"}
     majority = next(r for r in rows if r["frame"] == "frame_0001.png" and r["feature"] == "driver_gender"
                     and r["sample"] == "S01")
     assert majority["real"] == "FEMALE" and majority["category"] == "sim_only"

@@ -20,7 +20,8 @@ LEAVES = ("isu_validate.errors", "isu_validate.atomic", "isu_validate.srgb", "is
           "isu_validate.config", "isu_validate.lazy")
 # workflows: above the domain packages, below the command line
 WORKFLOWS = ("isu_validate.bench", "isu_validate.search", "isu_validate.pipeline", "isu_validate.execution",
-             "isu_validate.analysis", "isu_validate.recreate", "isu_validate.agree")
+             "isu_validate.analysis", "isu_validate.recreate", "isu_validate.agree", "isu_validate.replay",
+             "isu_validate.dataset")
 
 
 def _modules() -> dict[str, Path]:

@@ -138,7 +138,7 @@ def test_the_things_on_the_co_driver_seat_are_placed_where_the_rig_renders_them(
 def test_recreate_writes_pairs_sheets_and_the_effort_against_the_run_order(run_dir, tmp_path, capsys):
     out = tmp_path / "pairs"
     assert main(["recreate", str(run_dir), "--select", "mixed", "--n", "6", "--seed", "3", "--out", str(out),
-                 "--json"]) == 0
+                 "--sheet-preset", "run", "--json"]) == 0   # the run's frames: no Blender here
     plan = json.loads(capsys.readouterr().out)
     assert plan["minutes"] <= plan["run_order_minutes"]
     names = [s["sample"] for s in plan["samples"]]
@@ -159,6 +159,8 @@ def test_recreate_writes_pairs_sheets_and_the_effort_against_the_run_order(run_d
     assert manifest["effort"]["minutes"] == plan["minutes"] and manifest["space"] == "isu-paper"
     assert main(["recreate", str(run_dir), "--out", str(out)]) == 2   # never over a pairs directory in use
     assert "not empty" in capsys.readouterr().err
+    assert main(["recreate", str(run_dir), "--out", str(tmp_path / "other"), "--sheet-preset", "best"]) == 2
+    assert "unknown --sheet-preset 'best'" in capsys.readouterr().err
 
 
 def test_the_sketch_keeps_every_label_off_the_markers():

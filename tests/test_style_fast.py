@@ -39,13 +39,33 @@ def test_output_keeps_any_size_and_range():
         stylize_fast(net, torch.rand(1, 3, 8, 30))
 
 
+def _perturbed(cfg):
+    """A net as after some training (an untrained one is the identity: see the next test)."""
+    net = FastStyleNet(cfg).eval()
+    torch.nn.init.normal_(net.out[1].weight, std=0.1, generator=torch.Generator().manual_seed(0))
+    return net
+
+
 def test_noise_channel_is_seeded_and_optional():
     x = torch.rand(1, 3, 32, 32, generator=torch.Generator().manual_seed(0))
-    net = FastStyleNet(FastNetConfig(width=8, blocks=1)).eval()
+    net = _perturbed(FastNetConfig(width=8, blocks=1))
     assert torch.equal(stylize_fast(net, x, 3), stylize_fast(net, x, 3))
     assert not torch.equal(stylize_fast(net, x, 3), stylize_fast(net, x, 4))
-    quiet = FastStyleNet(FastNetConfig(width=8, blocks=1, noise=False)).eval()
+    quiet = _perturbed(FastNetConfig(width=8, blocks=1, noise=False))
     assert torch.equal(stylize_fast(quiet, x, 3), stylize_fast(quiet, x, 4))
+
+
+def test_an_untrained_net_is_the_identity_and_a_working_size_keeps_detail():
+    x = torch.rand(1, 3, 48, 64, generator=torch.Generator().manual_seed(0))
+    assert torch.equal(stylize_fast(FastStyleNet(FastNetConfig(width=8, blocks=1)).eval(), x), x)
+    net = _perturbed(FastNetConfig(width=8, blocks=1))
+    small = stylize_fast(net, x, 3, size=32)
+    assert small.shape == x.shape and 0 <= small.min() and small.max() <= 1
+    # the change is made at 32 px and upsampled (smooth); the input's own pixel detail passes through
+    def roughness(d):
+        return (d[..., 1:] - d[..., :-1]).abs().mean()
+    assert roughness(small - x) < 0.6 * roughness(stylize_fast(net, x, 3) - x)
+    assert torch.equal(stylize_fast(net, x, 3, size=64), stylize_fast(net, x, 3))  # not above its own size
 
 
 def test_training_lowers_loss_and_round_trips(files, tmp_path):

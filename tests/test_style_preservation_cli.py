@@ -85,8 +85,8 @@ def test_stylize_pairs_writes_nst_counts_flips_and_feeds_realism(pairs, tmp_path
     sut = tmp_path / "sut.py"
     sut.write_text(FLIPPING_SUT)
     style = pairs / "s0" / "real" / "cam0.png"
-    code = main(["stylize", "--style", str(style), "--pairs", str(pairs), "--size", "32", "--steps", "1",
-                 "--sut", f"command:{sys.executable} {sut}", "--threads", "2"])
+    code = main(["stylize", "--style", str(style), "--pairs", str(pairs), "--method", "gatys", "--size", "32",
+                 "--steps", "1", "--sut", f"command:{sys.executable} {sut}", "--threads", "2", "--style-distance", "0"])
     assert code == 0
     for sample in ("s0", "s1"):
         with Image.open(pairs / sample / "nst.png") as nst:
@@ -101,7 +101,8 @@ def test_stylize_pairs_writes_nst_counts_flips_and_feeds_realism(pairs, tmp_path
     assert flips["samples"] == 2 and flips["compared"] > 0 and flips["flipped"] > 0 and flips["sut_errors"] == 0
     # an interrupted run resumes: existing outputs are kept, not recomputed
     before = (pairs / "s0" / "nst.png").stat().st_mtime_ns
-    assert main(["stylize", "--style", str(style), "--pairs", str(pairs), "--size", "32", "--resume"]) == 0
+    assert main(["stylize", "--style", str(style), "--pairs", str(pairs), "--method", "gatys", "--size", "32",
+                 "--resume", "--style-distance", "0"]) == 0
     assert (pairs / "s0" / "nst.png").stat().st_mtime_ns == before
     assert all(r.get("resumed") for r in json.loads((pairs / "nst.json").read_text())["images"])
     capsys.readouterr()
@@ -113,10 +114,11 @@ def test_stylize_pairs_writes_nst_counts_flips_and_feeds_realism(pairs, tmp_path
 
 
 def test_stylize_errors_name_the_fix(pairs, tmp_path, capsys):
-    assert main(["stylize", "--pairs", str(pairs)]) == 2
-    assert "needs --style" in capsys.readouterr().err
-    assert main(["stylize", "--pairs", str(pairs), "--method", "fast"]) == 2
-    assert "needs --model" in capsys.readouterr().err
+    render = str(pairs / "s0" / "sim.png")
+    assert main(["stylize", render, "--out", str(tmp_path / "out")]) == 2
+    assert "the gatys method needs --style" in capsys.readouterr().err
+    assert main(["stylize", render, "--out", str(tmp_path / "out"), "--method", "fast"]) == 2
+    assert "the fast method needs --style" in capsys.readouterr().err
     assert main(["stylize", "train", "--style", str(pairs / "s0" / "sim.png")]) == 2
     assert "usage: isu-validate stylize train" in capsys.readouterr().err
 

@@ -5,7 +5,8 @@ directory (``isu_validate.pairs``: each sample's ``sim.png`` with each of its ``
 median and 5th/95th percentile of display luma (BT.709 weights on the 8-bit levels), their ratio, and
 the CIE dE2000 between the two images' mean colours; pooled and per-pair luma histograms; an HTML page.
 A render folder's by-products (contact sheet, channel images) are left out by the ``by_product`` test the
-command hands in (the renderer's ``outputs.by_product``)."""
+command hands in (the renderer's ``outputs.by_product``). Captures whose sidecar marks them stand-ins
+(renders taken for photos) are counted, flagged per pair and, in a mixed set, summarised apart."""
 from __future__ import annotations
 
 import base64
@@ -17,8 +18,10 @@ from typing import Callable
 
 import numpy as np
 
+from isu_validate.atomic import write_text
 from isu_validate.errors import InputError
 
+from ..sidecar import banner, provenance
 from .colour_align import read_rgb8
 from .frames import IMAGE_SUFFIXES
 from .metering import LUMA
@@ -74,21 +77,41 @@ def compare(sim_dir: str | Path, real_dir: str | Path | None = None,
     from .colour_fit import de2000
     matched, unmatched = (pairs(sim_dir, real_dir, by_product) if real_dir is not None
                           else pairs_of_directory(sim_dir))
-    rows = []
+    rows, stand_ins = [], provenance(real for _, real in matched).stand_in
     for sim_path, real_path in matched:
         s, r = measure(read_rgb8(sim_path)), measure(read_rgb8(real_path))
         name = sim_path.stem if real_dir is not None else f"{sim_path.parent.name}/{real_path.stem}"
-        rows.append({"name": name, "sim": str(sim_path), "real": str(real_path), "sim_luma": s, "real_luma": r,
+        rows.append({"name": name, "sim": str(sim_path), "real": str(real_path), "stand_in": real_path in stand_ins,
+                     "sim_luma": s, "real_luma": r,
                      "luma_ratio": r["mean"] / s["mean"] if s["mean"] > 0 else float("inf"),
                      "luma_difference": r["mean"] - s["mean"],
                      "de2000_mean_colour": float(de2000(np.array([s["mean_colour"]]),
                                                         np.array([r["mean_colour"]]))[0])})
+    n_stand_in = sum(row["stand_in"] for row in rows)
+    summary = {**_figures(rows), "unmatched": unmatched,
+               "stand_in_frames": n_stand_in, "real_frames": len(rows) - n_stand_in}
+    if 0 < n_stand_in < len(rows):   # a mixed set: the figures of each kind apart
+        summary["by_provenance"] = {kind: _figures([row for row in rows if row["stand_in"] == flag])
+                                    for kind, flag in (("real", False), ("stand_in", True))}
+    return {"summary": summary, "pairs": rows}
+
+
+def _figures(rows: list[dict]) -> dict:
     diffs = np.array([row["luma_difference"] for row in rows])
     des = np.array([row["de2000_mean_colour"] for row in rows])
-    summary = {"pairs": len(rows), "unmatched": unmatched, "mean_abs_luma_difference": float(np.abs(diffs).mean()),
-               "mean_luma_difference": float(diffs.mean()), "mean_de2000_mean_colour": float(des.mean()),
-               "max_de2000_mean_colour": float(des.max())}
-    return {"summary": summary, "pairs": rows}
+    return {"pairs": len(rows), "mean_abs_luma_difference": float(np.abs(diffs).mean()),
+            "mean_luma_difference": float(diffs.mean()), "mean_de2000_mean_colour": float(des.mean()),
+            "max_de2000_mean_colour": float(des.max())}
+
+
+def stand_in_banner(summary: dict) -> str:
+    """The banner line, with the figures of each kind when the set is mixed; '' without stand-ins."""
+    text = banner(summary["stand_in_frames"], summary["real_frames"])
+    for kind, part in summary.get("by_provenance", {}).items():
+        text += (f" {kind.replace('_', '-')} ({part['pairs']} pairs): mean |luma difference| "
+                 f"{part['mean_abs_luma_difference']:.3f}, dE2000 of mean colours "
+                 f"{part['mean_de2000_mean_colour']:.2f}.")
+    return text
 
 
 def _png(fig) -> str:
@@ -143,26 +166,30 @@ def write_html(result: dict, path: str | Path) -> Path:
     e = html.escape
     rows = "".join(
         f"<tr><td>{e(r['name'])}</td><td>{r['sim_luma']['mean']:.3f}</td><td>{r['real_luma']['mean']:.3f}</td>"
-        f"<td>{r['luma_ratio']:.3f}</td><td>{r['de2000_mean_colour']:.2f}</td></tr>" for r in result["pairs"])
+        f"<td>{r['luma_ratio']:.3f}</td><td>{r['de2000_mean_colour']:.2f}</td>"
+        f"<td>{'stand-in' if r['stand_in'] else 'real'}</td></tr>" for r in result["pairs"])
     figures = "".join(f"<h2>{e(title)}</h2><img src='data:image/png;base64,{data}'>" for title, data in plots(result))
     unmatched = "".join(f"<li>{e(u)}</li>" for u in s["unmatched"])
-    page = (f"<!doctype html><html><head><meta charset='utf-8'><title>exposure check</title>"
+    page = ("<!doctype html><html><head><meta charset='utf-8'><title>exposure check</title>"
             "<style>body{font-family:sans-serif;margin:2em}td,th{padding:2px 10px;text-align:right}"
             "td:first-child{text-align:left}</style></head><body>"
+            + _banner_html(s) +
             f"<h1>Renders against captures</h1><p>{s['pairs']} pairs; mean |luma difference| "
             f"{s['mean_abs_luma_difference']:.3f} (capture - render {s['mean_luma_difference']:+.3f}); "
             f"dE2000 of the mean colours: mean {s['mean_de2000_mean_colour']:.2f}, "
             f"max {s['max_de2000_mean_colour']:.2f}</p>{figures}"
             "<h2>Pairs</h2><table><tr><th>pair</th><th>render luma</th><th>capture luma</th><th>ratio</th>"
-            f"<th>dE2000 mean colour</th></tr>{rows}</table>"
+            f"<th>dE2000 mean colour</th><th>capture</th></tr>{rows}</table>"
             + (f"<h2>Unmatched files</h2><ul>{unmatched}</ul>" if unmatched else "") + "</body></html>")
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(page)
-    return path
+    return write_text(path, page)
+
+
+def _banner_html(summary: dict) -> str:
+    text = stand_in_banner(summary)
+    return (f"<div id='stand-in' style='border:3px solid #b3261e;background:#fdecea;padding:8px 14px'>"
+            f"<h2>Stand-in frames: not a real-world result</h2><p><b>{html.escape(text)}</b></p></div>"
+            if text else "")
 
 
 def write_json(result: dict, path: str | Path) -> Path:
-    path = Path(path)
-    path.write_text(json.dumps(result, indent=1))
-    return path
+    return write_text(path, json.dumps(result, indent=1))

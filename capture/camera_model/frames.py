@@ -5,7 +5,6 @@ A sidecar is the JSON ``capture shoot`` writes beside each frame (``frame_0000.j
 ``auto_exposure``, and ``timestamp``/``sequence`` when the source reports them."""
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -14,6 +13,9 @@ import numpy as np
 
 from isu_validate.errors import InputError, InputNotFound
 from isu_validate.image_files import IMAGE_SUFFIXES
+
+from ..sidecar import load_sidecar, sidecar_path
+
 BLACK_CODE, WHITE_CODE = 2, 253      # a frame with 99% of its pixels beyond these is all black / saturated
 EXTREME_SHARE = 0.99
 
@@ -81,13 +83,13 @@ def load(inputs) -> FrameSet:
 
 
 def _load_one(path: Path, group: str) -> tuple[Frame | None, str]:
-    sidecar = path.with_suffix(".json")
-    if not sidecar.exists():
+    sidecar = sidecar_path(path)
+    try:
+        meta = load_sidecar(path)
+    except FileNotFoundError:
         return None, (f"no sidecar {sidecar.name} (exposure time and ISO/gain unknown; "
                       "shoot with `isu-validate capture shoot`)")
-    try:
-        meta = json.loads(sidecar.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+    except ValueError as exc:
         return None, f"sidecar {sidecar.name} is not valid JSON ({exc})"
     exposure_us, gain = meta.get("exposure_us"), _gain(meta)
     if not isinstance(exposure_us, (int, float)) or exposure_us <= 0:

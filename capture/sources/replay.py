@@ -1,11 +1,11 @@
 """Replay: a session recorded by ``capture shoot`` (frames + sidecars) or a video file."""
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import cv2
 
+from ..sidecar import read_sidecar
 from .base import DeviceDisconnected, DeviceNotFound, ExposureRequest, Frame, FrameSource
 
 VIDEO_SUFFIXES = {".mp4", ".avi", ".mkv", ".mov"}
@@ -53,8 +53,7 @@ class ReplaySource(FrameSource):
         path = self._frames[self._index]
         self._index += 1
         image = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
-        sidecar = path.with_suffix(".json")
-        meta = json.loads(sidecar.read_text()) if sidecar.exists() else {}
+        meta = read_sidecar(path)   # a stand-in stays one when replayed
         meta["replayed_from"] = str(path)
         return Frame(image, meta)
 

@@ -5,7 +5,8 @@
 Rooms: ``ask`` (the SUT on each image, judged), ``compare`` (categories, agreement, summary),
 ``votes`` (reconstruction validity), ``gap`` (FID/KID), ``report`` (HTML with the heatmap).
 Outputs (a contract): ``agreement.csv``, ``summary.json``, ``report.html``; ``answers.json`` keeps
-what the SUT said about every image.
+what the SUT said about every image. Stand-in frames (renders taken for photos, their sidecars say so)
+are counted and flagged in all three.
 """
 from __future__ import annotations
 
@@ -20,7 +21,7 @@ from ..atomic import atomic_open, write_text
 from ..pairs import PairsDir, PairsError, Sample
 from ..space import SceneSpace, SpaceError, load_space
 from .ask import Asked, Asker
-from .compare import COMPARED, CSV_COLUMNS, rows_for_frame, summarise
+from .compare import COMPARED, CSV_COLUMNS, PROVENANCE, rows_for_frame, summarise
 from .votes import INVALID, tally
 from ..errors import InputError
 
@@ -74,7 +75,8 @@ def measure_agreement(pairs_path: str | os.PathLike, out: str | os.PathLike, set
     """
     log = log or (lambda text: print(f"agree: {text}", file=sys.stderr, flush=True))
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out {out} is a file; name a folder for the report")
     samples = PairsDir(pairs_path).samples()
     validity = tally(samples)
     space = _space(samples, settings.space)
@@ -88,8 +90,9 @@ def measure_agreement(pairs_path: str | os.PathLike, out: str | os.PathLike, set
         log(text)
 
     try:
+        out.mkdir(parents=True, exist_ok=True)   # only now: a bad option or input leaves no folder behind
         for k, sample in enumerate(samples, 1):
-            if validity.by_sample[sample.name] == INVALID and not settings.include_invalid:
+            if validity.by_sample.get(sample.name) == INVALID and not settings.include_invalid:
                 problem(f"{sample.name}: voted not the same scenario by its annotators: left out "
                         "(--include-invalid keeps it)")
                 continue
@@ -106,6 +109,9 @@ def measure_agreement(pairs_path: str | os.PathLike, out: str | os.PathLike, set
     summary["validity"] = validity.to_json()
     summary["realism"] = _gap(answered, rows, settings, problem) if settings.realism else {"skipped": "--no-realism"}
     summary.update(_realism_headline(summary["realism"]))
+    if settings.realism and summary["stand_in_frames"] and summary["real_frames"]:   # a mixed folder: apart too
+        summary["realism_by_provenance"] = {kind: _gap(answered, rows, settings, problem, flag)
+                                            for kind, flag in PROVENANCE.items()}
     summary["problems"] = problems
     summary["settings"] = {**{k: v for k, v in asdict(settings).items() if k != "sut_options"},
                            "space": space.name, "space_hash": space.hash, "pairs": str(Path(pairs_path).resolve()),
@@ -151,7 +157,7 @@ def _sample(sample: Sample, space: SceneSpace, asker: Asker, problem) -> tuple[S
     if label.get("space_hash") not in (None, space.hash):
         problem(f"{sample.name}: the space {space.name!r} changed since the run (hash {label['space_hash']} -> "
                 f"{space.hash}); the truth is recomputed from the current space")
-    frames = sample.real_frames()
+    frames, marks = sample.real_frames(), sample.provenance()
     if not frames:
         problem(f"{sample.name}: no real frames (real/*.png): capture them with "
                 f"`isu-validate capture shoot --source SPEC --pair {sample.path}`")
@@ -169,7 +175,7 @@ def _sample(sample: Sample, space: SceneSpace, asker: Asker, problem) -> tuple[S
         if real.unreadable:
             continue   # a broken frame has no rows; a frame the SUT failed on has sut_error rows
         rows += rows_for_frame(sample.name, frame.name, truth, occluded, answers.sim.judged, real.judged,
-                               answers.nst.judged if answers.nst else None)
+                               answers.nst.judged if answers.nst else None, frame in marks.stand_in)
     return answers, rows
 
 
@@ -180,11 +186,15 @@ def _ask(asker: Asker, scene: dict, image: Path, sample: str, problem) -> Asked:
     return asked
 
 
-def _gap(answered: list[SampleAnswers], rows: list[dict], settings: AgreeSettings, problem) -> dict:
-    compared = {r["sample"] for r in rows if r["category"] in COMPARED}
+def _gap(answered: list[SampleAnswers], rows: list[dict], settings: AgreeSettings, problem,
+         stand_in: bool | None = None) -> dict:
+    """FID/KID over the compared samples; ``stand_in`` True/False: over the stand-in or real frames alone."""
+    kind = {(r["sample"], r["frame"]): r["stand_in"] for r in rows if stand_in in (None, r["stand_in"])}
+    compared = {r["sample"] for r in rows if r["category"] in COMPARED and (r["sample"], r["frame"]) in kind}
     use = [a for a in answered if a.sample.name in compared]
     sim = [a.sample.sim for a in use]
-    real = [a.sample.real_dir / f for a in use for f, asked in a.real.items() if not asked.unreadable]
+    real = [a.sample.real_dir / f for a in use for f, asked in a.real.items()
+            if not asked.unreadable and (a.sample.name, f) in kind]
     nst = [a.sample.nst for a in use if a.nst and not a.nst.unreadable]
     from .gap import domain_gap
     try:

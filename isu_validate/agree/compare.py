@@ -9,6 +9,9 @@ Several real frames of one sample are compared one by one (one row per frame and
 Not compared, and counted apart: features the label marks occluded, features the SUT left
 unanswered (or answered outside the options) on either image, and images where the SUT failed.
 The same is done for the stylised render (nst) against the photo.
+A frame's sidecar may mark it a stand-in (a render taken for the photo where no car was at hand):
+each row says so, the frames of each kind are counted, and the agreement is also given per kind,
+so a figure measured on renders is never read as a real-world one.
 """
 from __future__ import annotations
 
@@ -21,7 +24,8 @@ OCCLUDED, UNANSWERED, SUT_ERROR = "occluded", "unanswered", "sut_error"
 AGREE = (BOTH_CORRECT, BOTH_WRONG)
 COMPARED = (BOTH_CORRECT, BOTH_WRONG, SIM_ONLY, REAL_ONLY)
 NOT_COMPARED = (OCCLUDED, UNANSWERED, SUT_ERROR)
-CSV_COLUMNS = ["sample", "frame", "feature", "truth", "sim", "real", "category", "nst", "nst_category"]
+CSV_COLUMNS = ["sample", "frame", "feature", "truth", "sim", "real", "category", "nst", "nst_category", "stand_in"]
+PROVENANCE = {"real": False, "stand_in": True}     # by_provenance key -> the rows' stand_in value
 
 
 @dataclass
@@ -44,13 +48,13 @@ def category(sim_status: str, real_status: str, render_only: str = SIM_ONLY) -> 
 
 
 def rows_for_frame(sample: str, frame: str, truth: dict[str, str], occluded: set[str], sim: Judged,
-                   real: Judged, nst: Judged | None) -> list[dict]:
-    """One row per feature asked about this scene."""
+                   real: Judged, nst: Judged | None, stand_in: bool = False) -> list[dict]:
+    """One row per feature asked about this scene; ``stand_in``: the frame is a stand-in render."""
     rows = []
     for feature, correct in truth.items():
         row = {"sample": sample, "frame": frame, "feature": feature, "truth": correct,
                "sim": _answer(sim, feature), "real": _answer(real, feature), "category": "",
-               "nst": _answer(nst, feature) if nst else "", "nst_category": ""}
+               "nst": _answer(nst, feature) if nst else "", "nst_category": "", "stand_in": stand_in}
         row["category"] = _category(feature, occluded, sim, real, SIM_ONLY)
         if nst is not None:
             row["nst_category"] = _category(feature, occluded, nst, real, NST_ONLY)
@@ -107,6 +111,7 @@ def summarise(rows: list[dict]) -> dict:
         "not_compared": {k: overall[k] for k in NOT_COMPARED},
         "per_feature": grouped(rows, "feature"),
         "per_sample": grouped(rows, "sample"),
+        **provenance(rows),
     }
     nst_rows = [r for r in rows if r["nst_category"]]
     if nst_rows:
@@ -125,3 +130,15 @@ def summarise(rows: list[dict]) -> dict:
                            "change": (None if not both else nst_same["agreement_rate"] - sim_same["agreement_rate"])},
         })
     return summary
+
+
+def provenance(rows: list[dict]) -> dict:
+    """``stand_in_frames``, ``real_frames`` (of the frames compared: together ``n_frames``), and the
+    agreement on each kind apart."""
+    frames = {(r["sample"], r["frame"]): r["stand_in"] for r in rows if r["category"] in COMPARED}
+    by_kind = {}
+    for kind, flag in PROVENANCE.items():
+        counted = counts(r["category"] for r in rows if r["stand_in"] == flag)
+        by_kind[kind] = {"frames": sum(v == flag for v in frames.values()), **counted}
+    return {"stand_in_frames": by_kind["stand_in"]["frames"], "real_frames": by_kind["real"]["frames"],
+            "by_provenance": by_kind}

@@ -1,12 +1,16 @@
 """``report.html`` of ``agree``: the paper's heatmap (features by samples, coloured by category), the
 per-feature table sorted by disagreement, and sim / real / nst side by side for the disagreeing samples
-with the SUT's answers (escaped, like everything a SUT said)."""
+with the SUT's answers (escaped, like everything a SUT said). When any "real" frame is a stand-in render,
+a banner at the top says how many, with the agreement on each kind apart."""
 from __future__ import annotations
 
 from pathlib import Path
 
+from capture.sidecar import banner
+
 from ..analysis.gallery import thumbnail
 from ..analysis.html import esc, page, paragraph, section, stat, table
+from ..atomic import write_text
 from ..space import SceneSpace
 from .compare import BOTH_CORRECT, BOTH_WRONG, NOT_COMPARED, NST_ONLY, REAL_ONLY, SIM_ONLY
 
@@ -17,16 +21,32 @@ RAW_LIMIT = 1200
 
 def write_report(path: Path, summary: dict, rows: list[dict], answered: list, space: SceneSpace) -> None:
     labels = {f.name: f.display_name for f in space.predicted}
-    sections = [_headline(summary), _heatmaps(rows, labels), _features(summary, labels),
+    sections = [_stand_in(summary), _headline(summary), _heatmaps(rows, labels), _features(summary, labels),
                 _disagreements(rows, answered, labels), _validity(summary), _realism(summary),
                 _problems(summary), _method(summary)]
     subtitle = (f"SUT {summary['settings']['sut']}, {summary['settings']['repeats']} repeats (per-feature majority), "
                 f"space {summary['settings']['space']}, pairs {summary['settings']['pairs']}")
-    path.write_text(page("Sim/real agreement", subtitle, [s for s in sections if s]))
+    write_text(path, page("Sim/real agreement", subtitle, [s for s in sections if s]))
 
 
 def _pct(value) -> str:
     return "–" if value is None else f"{100 * value:.1f}%"
+
+
+def _stand_in(s: dict) -> str:
+    """The banner: how many 'real' frames are stand-in renders, and (a mixed folder) the agreement on each."""
+    text = banner(s["stand_in_frames"], s["real_frames"])
+    if not text:
+        return ""
+    cards = ""
+    if s["real_frames"]:
+        by = s["by_provenance"]
+        cards = '<div class="cards">' + "".join(
+            stat(f"agreement on {name} ({by[kind]['frames']} frames, {by[kind]['compared']} features)",
+                 _pct(by[kind]["agreement_rate"]), "warn" if kind == "stand_in" else "")
+            for kind, name in (("real", "real captures"), ("stand_in", "stand-ins"))) + "</div>"
+    return (f'<section id="stand-in" style="border:3px solid #b3261e;background:#fdecea">'
+            f'<h2>Stand-in frames: not a real-world result</h2><p><b>{esc(text)}</b></p>{cards}</section>')
 
 
 def _headline(s: dict) -> str:
@@ -46,7 +66,8 @@ def _headline(s: dict) -> str:
         cards.append(stat("reconstruction validity", _pct(s["validity"]["rate"])))
     nc = s["not_compared"]
     note = (f"Not compared: {nc['occluded']} occluded, {nc['unanswered']} unanswered, {nc['sut_error']} with a SUT "
-            f"error. {s['n_frames']} real frames, each compared on its own.")
+            f"error. {s['n_frames']} real frames, each compared on its own"
+            + (f" ({s['stand_in_frames']} of them stand-in renders)." if s["stand_in_frames"] else "."))
     return section("Summary", f'<div class="cards">{"".join(cards)}</div>', paragraph(note), anchor="summary")
 
 
@@ -138,7 +159,9 @@ def _realism(s: dict) -> str:
     if "skipped" in r:
         return section("Domain gap (FID/KID)", paragraph(f"Not computed: {r['skipped']}"), anchor="realism")
     rows, notes = [], []
-    for name, v in r.items():
+    apart = {f"{name} ({kind.replace('_', '-')} frames)": v for kind, gap in s.get("realism_by_provenance", {}).items()
+             for name, v in gap.items() if name != "skipped"}
+    for name, v in {**r, **apart}.items():
         n = v.get("n_sim", v.get("n_nst"))
         rows.append({"sets": name.replace("_", " "), "FID": v["fid"], "KID mean": v["kid_mean"],
                      "KID std": v["kid_std"], "n": f"{n} / {v['n_real']}",

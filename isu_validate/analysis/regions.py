@@ -90,6 +90,8 @@ def _describe_feature(space: SceneSpace, name: str, conds: list) -> str:
         if equal:
             return f"{name} = {equal[0]}"
         remaining = [v for v in feature.values if v not in {c.value for c, _, _ in conds}]
+        if not remaining:                                    # every value ruled out: only "absent" is left
+            return f"{name} absent"
         text = f"{name} = {remaining[0]}" if len(remaining) == 1 else f"{name} in {{{', '.join(remaining)}}}"
         return text + (" (or absent)" if feature.active_when is not None else "")
     low = max((thr for _, op, thr in conds if op == ">"), default=None)
@@ -97,7 +99,7 @@ def _describe_feature(space: SceneSpace, name: str, conds: list) -> str:
     bottom = 0.0 if feature.discrete else feature.low       # codes below this mean "absent"
     if high is not None and high < bottom:
         return f"{name} absent"
-    may_be_absent = feature.active_when is not None and (low is None or low < bottom)
+    may_be_absent = feature.active_when is not None and low is None   # absent codes lie below every bound
     if low is not None and low < bottom:
         low = None                                           # "> absent code": present
     if feature.discrete:

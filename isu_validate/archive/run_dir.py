@@ -68,6 +68,15 @@ class RunDir:
     def label_file(self, test_id: str) -> Path:
         return self.path / LABELS_DIR / f"{test_id}.json"
 
+    def render_label(self, test_id: str) -> dict | None:
+        """The renderer's label of the test's frame (``images/<test_id>.label.json``); None when absent or
+        unreadable (test doubles write none)."""
+        try:
+            label = json.loads((self.path / IMAGES_DIR / f"{test_id}.label.json").read_text())
+        except (OSError, ValueError):
+            return None
+        return label if isinstance(label, dict) else None
+
     def image_path(self, record: TestRecord) -> Path | None:
         """The test's rendered frame where it exists (records hold it relative to the run directory)."""
         if not record.image:

@@ -1,7 +1,8 @@
-"""``isu-validate bench nst``: Gatys steps against loss, structure and time; fast-model throughput.
+"""``isu-validate bench nst``: Gatys steps against loss, structure and time; fast-model throughput;
+with ``--pairs-scale N``: ``stylize --pairs`` on N pairs, fast (the default) against Gatys.
 
 Without images it uses a synthetic cabin-like render and a noisy, tinted "photo" of it, so
-the numbers are reproducible anywhere; pass --content and --style for real ones.
+the numbers are reproducible anywhere; pass --content and --style for real ones, or --pairs DIR.
 """
 from __future__ import annotations
 
@@ -10,6 +11,8 @@ import time
 from pathlib import Path
 
 import numpy as np
+
+from isu_validate.errors import InputError
 
 
 def register_bench(sub) -> None:
@@ -26,6 +29,13 @@ def register_bench(sub) -> None:
                    help="also: N synthetic renders and N 'photos' of other scenes; train the fast model on the "
                         "renders (--train-steps, default 100) and report FID/KID sim-real against nst-real")
     p.add_argument("--style-weight", type=float, default=1.0, help="style weight for the --gap training (default 1)")
+    p.add_argument("--pairs-scale", type=int, default=0, metavar="N",
+                   help="instead: `stylize --pairs` on N pairs (the paper's study: 53) with the fast method, "
+                        "Gatys on --gatys-images of them; time and quality of both")
+    p.add_argument("--pairs", type=Path, help="with --pairs-scale: a pairs directory whose samples are repeated "
+                                              "to N (default: synthetic 640x480 pairs)")
+    p.add_argument("--gatys-images", type=int, default=3, help="with --pairs-scale: pairs Gatys styles (default 3; "
+                                                               "its total for N is extrapolated)")
     p.add_argument("--threads", type=int, default=None)
     p.set_defaults(func=run)
 
@@ -156,6 +166,8 @@ def run(args) -> int:
     import torch  # imported here: registering the bench must not load torch
     if args.threads:
         torch.set_num_threads(args.threads)
+    if args.pairs_scale:
+        return pairs_table(args.pairs_scale, args.pairs, args.gatys_images, args.threads or torch.get_num_threads())
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         content, style = _images(args, folder)
@@ -167,3 +179,114 @@ def run(args) -> int:
         if args.gap:
             gap_table(args.gap, args.train_steps or 100, folder, args.style_weight)
     return 0
+
+
+# ---- --pairs-scale N: the paper's study size through the real `stylize --pairs` path
+
+def scaled_pairs(n: int, source: Path | None, folder: Path) -> Path:
+    """N pairs in ``folder``: ``source``'s samples repeated (sim.png and real frames), or synthetic ones
+    (a 640x480 cabin render and its 'photo': the same scene through ``camera_look``)."""
+    import shutil
+
+    from isu_validate.pairs import PairsDir
+    root = folder / "pairs"
+    originals = [s for s in PairsDir(source).samples() if s.sim.is_file()] if source else []
+    if source and not originals:
+        raise InputError(f"pairs directory {source} has no <sample>/sim.png to repeat")
+    for i in range(n):
+        sample = root / f"S{i + 1:02d}"
+        (sample / "real").mkdir(parents=True)
+        if originals:
+            orig = originals[i % len(originals)]
+            shutil.copyfile(orig.sim, sample / "sim.png")
+            for frame in orig.real_frames():
+                shutil.copyfile(frame, sample / "real" / frame.name)
+        else:
+            render = synthetic_render(640, 480, seed=i)
+            render.save(sample / "sim.png")
+            camera_look(synthetic_render(640, 480, seed=i), seed=i).save(sample / "real" / "frame_0000.png")
+    return root
+
+
+def _stylize(argv: list[str], report: Path) -> tuple[dict, float, float]:
+    """Run `isu-validate stylize` as a user does (its own process, imports included); its report, wall and
+    CPU seconds."""
+    import json
+    import resource
+    import subprocess
+    import sys
+
+    def children_cpu() -> float:
+        usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+        return usage.ru_utime + usage.ru_stime
+    wall, cpu = time.perf_counter(), children_cpu()
+    done = subprocess.run([sys.executable, "-m", "isu_validate.cli", "stylize", *argv], capture_output=True, text=True)
+    if done.returncode != 0:
+        raise RuntimeError(f"stylize {' '.join(argv)} failed ({done.returncode}): {done.stderr[-800:]}")
+    return json.loads(report.read_text()), time.perf_counter() - wall, children_cpu() - cpu
+
+
+def _quality(distance, records: list[dict]) -> dict:
+    """Style distance (all images, same measure) and preservation means of a run's records."""
+    from style_transfer.distance import gap_closed
+    d = [distance(Path(r["output"])) for r in records]
+    d0 = [distance(Path(r["source"])) for r in records]
+    return {"distance": float(np.mean(d)), "closed": float(np.mean([gap_closed(a, b) for a, b in zip(d, d0)])),
+            "ssim": float(np.mean([r["ssim_luma"] for r in records])),
+            "edge": float(np.mean([r["edge_agreement"] for r in records]))}
+
+
+def pairs_table(n: int, source: Path | None, gatys_images: int, threads: int) -> int:
+    """The fast default on N pairs, end to end, against Gatys on the first few of them."""
+    import os
+    import shutil
+
+    from style_transfer.distance import StyleDistance
+    load = os.getloadavg()[0]
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        pairs = scaled_pairs(n, source, folder)
+        common = ["--threads", str(threads)]
+        fast_run = ["--pairs", str(pairs), "--model-cache", str(folder / "cache"), *common]
+        fast, fast_wall, fast_cpu = _stylize(fast_run, pairs / "nst.json")
+        _, rerun_wall, _ = _stylize(fast_run, pairs / "nst.json")
+        few = folder / "few"
+        for sample in sorted(pairs.iterdir())[:gatys_images]:
+            if sample.is_dir():
+                shutil.copytree(sample, few / sample.name, ignore=shutil.ignore_patterns("nst.png"))
+        styles = [a for p in fast["settings"]["styles"] for a in ("--style", p)]  # the same style set
+        gatys, gatys_wall, gatys_cpu = _stylize(["--pairs", str(few), "--method", "gatys", "--style-distance", "0",
+                                                 *styles, *common], few / "nst.json")
+        distance = StyleDistance([Path(p) for p in fast["settings"]["styles"]])
+        fast_few = [r for r in fast["images"] if Path(r["source"]).parent.name in {p.name for p in few.iterdir()}]
+        q_fast, q_gatys = _quality(distance, fast_few), _quality(distance, gatys["images"])
+        q_fast_all = _quality(distance, fast["images"])
+    _print_pairs(n, source, threads, load, fast, fast_wall, fast_cpu, rerun_wall, gatys, gatys_wall, gatys_cpu,
+                 q_fast, q_gatys, q_fast_all)
+    return 0
+
+
+def _print_pairs(n, source, threads, load, fast, fast_wall, fast_cpu, rerun_wall, gatys, gatys_wall, gatys_cpu,
+                 q_fast, q_gatys, q_fast_all) -> None:
+    import os
+    k, settings = gatys["count"], fast["settings"]
+    print(f"stylize --pairs on {n} pairs ({'repeated from ' + str(source) if source else 'synthetic 640x480'}), "
+          f"{threads} torch threads; style set: {len(settings['styles'])} real frame(s); "
+          f"load average {load:.1f} before, {os.getloadavg()[0]:.1f} after (a busy machine slows every figure)")
+    print(f"fast: {settings['train']['steps']} training steps, net at {settings['fast_size'] or 'full'} px; "
+          f"gatys: {k} pair(s) styled, its total for {n} extrapolated; quality on those {k} image(s); "
+          "style distance at 256 px, relu1_1..relu5_1")
+    print(f"{'method':<7} {'train s':>8} {'s/image':>8} {f'total s ({n})':>14} {'CPU s':>7} "
+          f"{'gap closed':>11} {'style dist':>11} {'SSIM-luma':>10} {'edges':>6}")
+    rows = {"fast": (f"{settings['train_seconds']:.1f}", fast["images"], f"{fast_wall:.0f}", fast_cpu, q_fast),
+            "gatys": ("-", gatys["images"], f"~{gatys_wall / k * n:.0f}", gatys_cpu / k * n, q_gatys)}
+    for name, (train, images, total, cpu, q) in rows.items():
+        per_image = np.mean([r["seconds"] for r in images])
+        print(f"{name:<7} {train:>8} {per_image:>8.2f} {total:>14} {cpu:>7.0f} {q['closed']:>11.3f} "
+              f"{q['distance']:>11.1f} {q['ssim']:>10.3f} {q['edge']:>6.3f}")
+    ratio = q_fast["distance"] / q_gatys["distance"]
+    print(f"fast against gatys: {gatys_wall / k * n / fast_wall:.0f}x faster for {n} pairs; style distance "
+          f"{ratio:.2f}x Gatys's; SSIM-luma {q_fast['ssim'] - q_gatys['ssim']:+.3f}; "
+          f"edges {q_fast['edge'] - q_gatys['edge']:+.3f}")
+    print(f"fast on all {n}: gap closed {q_fast_all['closed']:.3f}, SSIM-luma {q_fast_all['ssim']:.3f}; "
+          f"the same command again (cached net, every pair kept): {rerun_wall:.1f} s")

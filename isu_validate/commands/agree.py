@@ -4,7 +4,10 @@
     isu-validate agree votes PAIRS --annotator NAME [--vote SAMPLE=yes|no ...] [--redo]
 
 Writes DIR/agreement.csv, DIR/summary.json, DIR/report.html (and answers.json). Exits 1 only when
-nothing could be compared; every problem is named in the log and in the report.
+nothing could be compared; every problem is named in the log and in the report. Stand-in frames
+(`capture shoot --source standin`) are counted and flagged in every output. Interrupted, either
+goes on where it stopped when run again the same way: agree from the SUT replies cached in
+DIR/cache, votes from the votes already saved.
 """
 from __future__ import annotations
 
@@ -15,6 +18,11 @@ import sys
 from pathlib import Path
 
 from ..errors import InputError
+
+INTERRUPTED = ("interrupted; the SUT replies so far are cached in {cache}: run the same command again to go on, "
+               "nothing already answered is asked again")
+VOTES_INTERRUPTED = ("interrupted; every vote given so far is saved: run the same command again to go on with "
+                     "the pairs you have not voted on")
 
 
 def register(sub) -> None:
@@ -36,14 +44,16 @@ def register(sub) -> None:
     v.add_argument("--vote", action="append", default=[], metavar="SAMPLE=yes|no",
                    help="votes: record without asking (repeatable)")
     v.add_argument("--redo", action="store_true", help="votes: ask again about pairs you voted on")
-    p.set_defaults(func=run)
+    p.set_defaults(func=run, interrupted=INTERRUPTED.format(cache="the --out folder's cache/sut"))
 
 
 def run(args) -> int:
     if args.target[0] == "votes":
+        args.interrupted = VOTES_INTERRUPTED
         return _votes(args)
     if len(args.target) != 1 or not args.sut or not args.out:
         raise InputError("usage: isu-validate agree PAIRS --sut SPEC --out DIR (see --help)")
+    args.interrupted = INTERRUPTED.format(cache=args.out / "cache" / "sut")
     from ..agree import AgreeSettings, measure_agreement
     settings = AgreeSettings(sut=args.sut, repeats=args.repeats, space=args.space,
                              include_invalid=args.include_invalid, realism=not args.no_realism,
@@ -63,12 +73,25 @@ def _pct(v) -> str:
     return "-" if v is None else f"{100 * v:.1f}%"
 
 
+def _frames(s: dict) -> str:
+    if not s["stand_in_frames"]:
+        return f"{s['n_frames']} real frames"
+    return f"{s['n_frames']} 'real' frames, {s['stand_in_frames']} of them stand-in renders"
+
+
 def _lines(s: dict, out: Path) -> str:
-    lines = [f"agreement (sim vs real): {_pct(s['agreement_rate'])} of {s['n_features_compared']} features compared "
-             f"on {s['n_samples']} samples ({s['n_frames']} real frames)",
-             f"  both correct {s['both_correct']}, both wrong {s['both_wrong']}, correct only on sim {s['sim_only']}, "
-             f"correct only on real {s['real_only']}; not compared: "
-             + ", ".join(f"{k} {v}" for k, v in s["not_compared"].items())]
+    from capture.sidecar import banner
+    lines = [banner(s["stand_in_frames"], s["real_frames"])] if s["stand_in_frames"] else []
+    lines += [f"agreement (sim vs real): {_pct(s['agreement_rate'])} of {s['n_features_compared']} features compared "
+              f"on {s['n_samples']} samples ({_frames(s)})",
+              f"  both correct {s['both_correct']}, both wrong {s['both_wrong']}, correct only on sim {s['sim_only']}, "
+              f"correct only on real {s['real_only']}; not compared: "
+              + ", ".join(f"{k} {v}" for k, v in s["not_compared"].items())]
+    if s["stand_in_frames"] and s["real_frames"]:
+        by = s["by_provenance"]
+        lines.append("  apart: " + "; ".join(
+            f"on {name} {_pct(by[kind]['agreement_rate'])} of {by[kind]['compared']} features "
+            f"({by[kind]['frames']} frames)" for kind, name in (("real", "real captures"), ("stand_in", "stand-ins"))))
     if "agreement_rate_nst" in s:
         change = s["nst_change"]["change"]
         lines.append(f"agreement (nst vs real): {_pct(s['agreement_rate_nst'])} of {s['n_features_compared_nst']}; "
@@ -88,38 +111,63 @@ def _lines(s: dict, out: Path) -> str:
 
 
 def _votes(args) -> int:
-    from ..agree.votes import parse_answer, tally
+    from ..agree.review import write_review
+    from ..agree.votes import tally
     from ..pairs import PairsDir
     if len(args.target) != 2 or not args.annotator:
         raise InputError("usage: isu-validate agree votes PAIRS --annotator NAME [--vote SAMPLE=yes|no ...]")
     pairs = PairsDir(args.target[1])
+    pairs.require()
     if args.vote:
-        for item in args.vote:
-            name, _, answer = item.partition("=")
-            same = parse_answer(answer)
-            if same is None:
-                raise InputError(f"--vote {item!r}: write SAMPLE=yes or SAMPLE=no")
-            pairs.sample(name).record_vote(args.annotator, same)
-    else:
-        _ask_votes(pairs, args.annotator, args.redo)
+        _record_votes(pairs, args.annotator, args.vote)
+    review = write_review(pairs)   # on every path: the annotator's page, with the votes so far
+    print(f"review the pairs side by side in {review}")
+    if not args.vote:
+        try:
+            _ask_votes(pairs, args.annotator, args.redo)
+        finally:
+            write_review(pairs)   # with the votes just given
     validity = tally(pairs.samples()).to_json()
+    apart = f"; {len(validity['without_render'])} without sim.png, not counted" if validity["without_render"] else ""
     print(f"validity: {_pct(validity['rate'])} ({validity['valid']} valid, {validity['invalid']} invalid, "
-          f"{validity['tied']} tied, {validity['unvoted']} without votes)")
+          f"{validity['tied']} tied, {validity['unvoted']} without votes{apart})")
     return 0
+
+
+def _record_votes(pairs, annotator: str, items: list[str]) -> None:
+    """``--vote SAMPLE=yes|no``: every item is checked before the first is stored."""
+    from ..agree.votes import parse_answer
+    given = []
+    for item in items:
+        name, _, answer = item.partition("=")
+        same = parse_answer(answer)
+        if same is None:
+            raise InputError(f"--vote {item!r}: write SAMPLE=yes or SAMPLE=no")
+        sample = pairs.sample(name)
+        if not sample.sim.is_file():
+            raise InputError(f"--vote {item!r}: {sample.sim} is missing, so there is no pair to vote on")
+        given.append((sample, same))
+    for sample, same in given:
+        sample.record_vote(annotator, same)
 
 
 def _ask_votes(pairs, annotator: str, redo: bool) -> None:
     """One question per pair on the terminal; each answer is saved at once (stop any time, go on later)."""
     from ..agree.votes import parse_answer
-    from ..agree.review import write_review
-    review = write_review(pairs)
-    print(f"look at the pairs side by side in {review}; answer y (same scenario), n (not), s (skip), q (quit)")
+    print("answer y (same scenario), n (not), s (skip), q (quit)")
+    given = 0
     for sample in pairs.samples():
-        if annotator in sample.votes() and not redo:
+        if (annotator in sample.votes() and not redo) or not sample.sim.is_file():
             continue
         frames = ", ".join(str(f) for f in sample.real_frames()) or "no real frames"
         while True:
-            answer = input(f"{sample.name}: {sample.sim} vs {frames}: same scenario? [y/n/s/q] ").strip().lower()
+            try:
+                answer = input(f"{sample.name}: {sample.sim} vs {frames}: same scenario? [y/n/s/q] ").strip().lower()
+            except EOFError:   # no terminal: one line, not a traceback; every vote given is already saved
+                print()
+                raise InputError(f"no answer to read: standard input is closed or at its end (no terminal?); "
+                                 f"the {given} vote(s) given are saved; vote in a terminal, or without one with "
+                                 "--vote SAMPLE=yes|no") from None
             if answer in ("q", "quit"):
                 return
             if answer in ("s", "skip"):
@@ -127,4 +175,5 @@ def _ask_votes(pairs, annotator: str, redo: bool) -> None:
             same = parse_answer(answer)
             if same is not None:
                 sample.record_vote(annotator, same)
+                given += 1
                 break

@@ -21,6 +21,8 @@ BENCHES = {
     "fid": "FID/KID: accuracy against a float64 reference, n against spread, speed",
     "nst": "style transfer: Gatys steps against loss and time; fast-model throughput",
     "exposure": "imaging model: fit error against known cameras, apply time, chart detectors",
+    "dataset": "dataset: images/s with masks, and COCO masks against a re-render",
+    "augment": "the fix loop: focused vs uniform data, retrain the reference ISU, replay",
 }
 
 

@@ -131,14 +131,23 @@ def _standin_render(sample, renders: ExitStack):
     return render
 
 
+def _render_camera(sample):
+    """The pair's camera (camera.toml): its focal length turns the aid's pixels into degrees; None without one."""
+    from capture.camera import load_camera
+    if not sample.camera.is_file():
+        print(f"note: {sample.camera} is missing: the alignment aid advises in pixels, not degrees", file=sys.stderr)
+        return None
+    return load_camera(sample.camera)
+
+
 def _aligner(sample):
     """Per frame: the alignment aid image in the pair's align/, the scores printed and kept in the sidecar."""
     from capture.alignment import align, read_bgr
     import cv2
-    render = read_bgr(sample.sim)
+    render, camera = read_bgr(sample.sim), _render_camera(sample)
 
     def annotate(path, frame) -> dict:
-        result, image = align(render, frame.image)
+        result, image = align(render, frame.image, camera)
         target = sample.align_image(path)
         target.parent.mkdir(parents=True, exist_ok=True)
         cv2.imwrite(str(target), image)
@@ -152,13 +161,13 @@ def run_align(args) -> int:
     from capture.alignment import align, read_bgr
     import cv2
     sample = _pair(args.pair)
-    render = read_bgr(sample.sim)
+    render, camera = read_bgr(sample.sim), _render_camera(sample)
     live = sample.align_dir / "live.png"
     live.parent.mkdir(parents=True, exist_ok=True)
     with ExitStack() as renders, _source(args.source, sample, renders) as source:  # a CaptureError is a UserError
         n = 0
         while not args.frames or n < args.frames:
-            result, image = align(render, source.read().image)
+            result, image = align(render, source.read().image, camera)
             cv2.imwrite(str(live), image)
             n += 1
             print(f"frame {n}: {result.line()}", flush=True)

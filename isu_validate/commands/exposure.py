@@ -6,6 +6,9 @@
     isu-validate exposure colour --real REAL.png --sim SIM.png|SIM.exr|reference --out CCM.json [--json]
                                  [--camera CAM.toml [--camera-out CAM3.toml]]
     isu-validate exposure check SIM_DIR REAL_DIR | PAIRS [--out DIR] [--json]
+
+exposure check counts the captures whose sidecar marks them stand-ins (renders taken for photos)
+and says so first in its report, check.json and console summary.
 """
 from __future__ import annotations
 
@@ -211,7 +214,7 @@ def _colour(args) -> int:
 
 
 def _check(args) -> int:
-    from capture.camera_model.check import compare, write_html, write_json
+    from capture.camera_model.check import compare, stand_in_banner, write_html, write_json
     from isu_validate.render.outputs import by_product
     result = compare(args.sim_dir, args.real_dir, by_product)
     args.out.mkdir(parents=True, exist_ok=True)
@@ -221,6 +224,8 @@ def _check(args) -> int:
     if args.json:
         print(json.dumps(s, indent=1))
     else:
+        if s["stand_in_frames"]:   # first: a figure on renders must not read as a real-world one
+            print(stand_in_banner(s))
         print(f"{s['pairs']} pairs: mean |luma difference| {s['mean_abs_luma_difference']:.3f}, dE2000 of mean "
               f"colours {s['mean_de2000_mean_colour']:.2f} (max {s['max_de2000_mean_colour']:.2f}); report {page}")
         if s["unmatched"]:

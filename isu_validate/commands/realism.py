@@ -1,4 +1,8 @@
-"""``isu-validate realism A B``: FID and KID between two image sets (or the roles of a pairs directory)."""
+"""``isu-validate realism A B``: FID and KID between two image sets (or the roles of a pairs directory).
+
+A set taken for reality (a pairs directory's real role, or any set holding stand-ins) is counted: each
+result carries ``stand_in_frames`` and ``real_frames``, the console says first when any frame is a
+stand-in render, and a mixed set is also compared on each kind of frame apart."""
 from __future__ import annotations
 
 import json
@@ -77,41 +81,88 @@ def run(args) -> int:
 
 
 def _run(args) -> int:
-    from isu_validate.realism import FeatureExtractor, MetricSettings, compare_features, resolve_set
+    from isu_validate.realism import FeatureExtractor, MetricSettings, compare_features
     from isu_validate.realism.cache import default_cache_dir
-    from isu_validate.realism.features import stderr_progress
 
     comparisons = _comparisons(args)
     cache = None if args.no_cache else (args.cache_dir or default_cache_dir())
     extractor = FeatureExtractor(args.weights, args.resize_filter, args.batch_size, cache)
     metric = MetricSettings(args.bootstrap, args.ci_level, args.kid_subset_size, args.kid_subsets, args.seed)
     feats: dict[str, object] = {}
-    results = {}
+    marks: dict[str, tuple] = {}   # spec -> (Provenance, stand-in mask) of a set taken for reality
+    results, counts = {}, {}
+
+    def compare(name: str, a: str, b: str, f_a, f_b) -> None:
+        result = compare_features(f_a, f_b, metric, asdict(extractor.settings))
+        result.settings.update(set_a=a, set_b=b, feature_cache=str(cache) if cache else "off")
+        results[name] = result
+
     for a, b in comparisons:
         for spec in (a, b):
             if spec not in feats:
-                image_set = resolve_set(spec)
-                if image_set.left_out:
-                    print(f"{spec}: left out {len(image_set.left_out)} render by-product(s) that are no frames: "
-                          f"{', '.join(p.name for p in image_set.left_out[:5])}"
-                          f"{' ...' if len(image_set.left_out) > 5 else ''}", file=sys.stderr)
-                feats[spec] = extractor.features(image_set.paths, stderr_progress(spec))
-        result = compare_features(feats[a], feats[b], metric, asdict(extractor.settings))
-        result.settings.update(set_a=a, set_b=b, feature_cache=str(cache) if cache else "off")
-        results[f"{a} vs {b}"] = result
-    _emit(args, results)
+                feats[spec] = _features(spec, extractor, marks)
+        name = f"{a} vs {b}"
+        compare(name, a, b, feats[a], feats[b])
+        counts[name] = _counts([marks[spec][0] for spec in (a, b) if spec in marks])
+        for kind, f_a, f_b, n in _apart(a, b, feats, marks):   # a mixed set: each kind of frame apart
+            compare(f"{name} ({kind} only)", a, b, f_a, f_b)
+            counts[f"{name} ({kind} only)"] = n
+    _emit(args, results, counts, {spec: found for spec, (found, _) in marks.items()})
     return 0
 
 
-def _emit(args, results) -> None:
-    payload = (next(iter(results.values())).to_json() if len(results) == 1
-               else {name: r.to_json() for name, r in results.items()})
+def _features(spec: str, extractor, marks: dict):
+    """The set's Inception features; a set taken for reality also goes into ``marks`` with its stand-ins."""
+    import numpy as np
+
+    from isu_validate.realism import resolve_set
+    from isu_validate.realism.features import stderr_progress
+
+    image_set = resolve_set(spec)
+    if image_set.left_out:
+        print(f"{spec}: left out {len(image_set.left_out)} render by-product(s) that are no frames: "
+              f"{', '.join(p.name for p in image_set.left_out[:5])}"
+              f"{' ...' if len(image_set.left_out) > 5 else ''}", file=sys.stderr)
+    if (found := image_set.provenance()) is not None:
+        marks[spec] = (found, np.array([p in found.stand_in for p in image_set.paths], bool))
+    return extractor.features(image_set.paths, stderr_progress(spec))
+
+
+def _counts(found: list) -> dict:
+    """``stand_in_frames``/``real_frames`` of the sets taken for reality in one comparison ({} if none)."""
+    if not found:
+        return {}
+    return {"stand_in_frames": sum(len(f.stand_in) for f in found), "real_frames": sum(len(f.real) for f in found)}
+
+
+def _apart(a: str, b: str, feats: dict, marks: dict):
+    """(kind, features of a, of b, counts) with a mixed set cut to one kind of frame (2 frames at least)."""
+    for spec in (a, b):
+        found, stand_in = marks.get(spec, (None, None))
+        if found is None or not (found.stand_in and found.real):
+            continue
+        for kind, keep in (("real captures", ~stand_in), ("stand-ins", stand_in)):
+            n = int(keep.sum())
+            if n < 2:
+                print(f"{spec}: only {n} {kind}: no FID/KID on them apart", file=sys.stderr)
+                continue
+            cut = {a: feats[a], b: feats[b], spec: feats[spec][keep]}
+            yield kind, cut[a], cut[b], {"stand_in_frames": n if kind == "stand-ins" else 0,
+                                         "real_frames": 0 if kind == "stand-ins" else n}
+
+
+def _emit(args, results, counts, marks) -> None:
+    payloads = {name: {**r.to_json(), **counts.get(name, {})} for name, r in results.items()}
+    payload = next(iter(payloads.values())) if len(payloads) == 1 else payloads
     if args.out:
-        args.out.parent.mkdir(parents=True, exist_ok=True)
-        args.out.write_text(json.dumps(payload, indent=2) + "\n")
+        from isu_validate.atomic import write_text
+        write_text(args.out, json.dumps(payload, indent=2) + "\n")
     if args.json:
         print(json.dumps(payload, indent=2))
         return
+    for spec, found in marks.items():   # first: a figure on renders must not read as a real-world one
+        if found.stand_in:
+            print(f"{spec}: {found.banner()}")
     for name, r in results.items():
         ci = f" [{r.fid_ci[0]:.2f}, {r.fid_ci[1]:.2f}] ({r.settings['fid_ci_level']:.0%} bootstrap, " \
              f"{r.settings['fid_bootstrap']} resamples)" if r.fid_ci else ""

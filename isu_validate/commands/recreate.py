@@ -1,7 +1,10 @@
 """``isu-validate recreate``: pick tests from runs for a lab to recreate; write the pairs and printable sheets.
 
     isu-validate recreate RUN... --select failing|passing|mixed --n N --seed S --out PAIRS
-                          [--failing-share F] [--effort FILE] [--cabin RIG]
+                          [--failing-share F] [--effort FILE] [--cabin RIG] [--sheet-preset PRESET|run]
+
+Each sheet's picture is the scene rendered again for print (Blender, --sheet-preset, 640 px wide or more,
+about 2 s a scene at standard) into PAIRS/<sample>/sheet.png; sim.png stays the run's frame.
 """
 from __future__ import annotations
 
@@ -22,15 +25,23 @@ def register(sub) -> None:
     p.add_argument("--effort", default="default",
                    help="change costs in minutes, rigs/effort/NAME.toml or a file (default: default)")
     p.add_argument("--cabin", help="cabin rig for the measurements (default: the run's)")
+    p.add_argument("--sheet-preset", default="standard",
+                   help="render preset of the sheets' pictures (default standard), or 'run': the run's own "
+                        "frames, no Blender (blurred when the run rendered small)")
     p.add_argument("--out", type=Path, required=True, help="new pairs directory")
     p.add_argument("--json", action="store_true", help="print the plan as JSON")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
+    import sys
+
     from ..recreate import plan_recreation
+    if args.sheet_preset != "run":
+        print(f"rendering each sheet's picture at the {args.sheet_preset} preset (Blender, about 2 s a scene at "
+              "standard; --sheet-preset run skips it)", file=sys.stderr)
     plan = plan_recreation(args.runs, args.select, args.n, args.seed, args.out, args.failing_share, args.effort,
-                    args.cabin)
+                           args.cabin, args.sheet_preset)
     if args.json:
         print(json.dumps({"out": str(plan.out), "samples": plan.samples, "minutes": plan.minutes,
                           "run_order_minutes": plan.run_order_minutes, "method": plan.method,

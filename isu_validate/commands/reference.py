@@ -1,4 +1,5 @@
-"""``isu-validate reference train``: render a balanced set, train the reference ISU's heads."""
+"""``isu-validate reference train``: render a balanced set, train the reference ISU's heads; with
+``--extra DATASET...``, retrain them on a model's own stored features plus the datasets' images."""
 from __future__ import annotations
 
 import json
@@ -10,30 +11,55 @@ from ..errors import InputError
 def register(sub) -> None:
     parser = sub.add_parser("reference", help="the embedded reference ISU (train it)")
     ref_sub = parser.add_subparsers(dest="reference_command", metavar="ACTION")
-    train = ref_sub.add_parser("train", help="render a balanced training set and train the heads")
-    train.add_argument("--n", type=int, default=800, help="training scenes (default 800)")
-    train.add_argument("--held-out", type=int, default=200, help="held-out scenes for the model card (default 200)")
-    train.add_argument("--seed", type=int, default=0)
+    train = ref_sub.add_parser("train", help="render a balanced training set and train the heads (or retrain "
+                                             "with --extra)")
+    train.add_argument("--n", type=int, help=f"training scenes (default {DEFAULTS['n']})")
+    train.add_argument("--held-out", type=int,
+                       help=f"held-out scenes for the model card (default {DEFAULTS['held_out']})")
+    train.add_argument("--seed", type=int)
     train.add_argument("--space", default="isu-paper")
-    train.add_argument("--preset", default="draft", help="render preset (default draft, as the demo renders)")
+    train.add_argument("--preset", help="render preset (default draft, as the demo renders)")
     train.add_argument("--check-preset", action="append", default=[], metavar="PRESET[:N]",
                        help="also render the first N held-out scenes (default all) at PRESET and report the "
                             "accuracy on them, e.g. standard:100 (repeatable)")
-    train.add_argument("--camera", default="default")
-    train.add_argument("--cabin", default="default")
+    train.add_argument("--camera")
+    train.add_argument("--cabin")
+    train.add_argument("--extra", nargs="+", type=Path, metavar="DATASET",
+                       help="retrain on the --base model's own training scenes (its stored features: nothing is "
+                            "rendered again) plus these datasets (`isu-validate dataset`); the card compares every "
+                            "feature with the base model on its held-out scenes")
+    train.add_argument("--base", type=Path,
+                       help="with --extra: the model whose scenes, seed and held-out set to keep (default the "
+                            "shipped reference ISU)")
     train.add_argument("--out", type=Path,
-                       help="model folder (default WORKDIR/model; the shipped model is replaced only when "
-                            "named here: --out data/reference-isu)")
+                       help="model folder (default WORKDIR/model, with --extra WORKDIR/model-extra; the shipped "
+                            "model is replaced only when named here: --out data/reference-isu)")
     train.add_argument("--workdir", type=Path, default=Path("runs/reference-training"),
-                       help="where the rendered sets go; an interrupted training resumes from here")
+                       help="where the rendered sets (with --extra: the datasets' features) go; an interrupted "
+                            "training resumes from here")
     train.set_defaults(func=cmd_train)
     parser.set_defaults(func=lambda args: parser.print_help() or 2)
 
 
+DEFAULTS = {"n": 800, "held_out": 200, "seed": 0, "preset": "draft", "camera": "default", "cabin": "default"}
+FROM_SCRATCH = ("n", "held_out", "seed", "preset", "check_preset", "camera", "cabin")
+
+
 def cmd_train(args) -> int:
+    if args.extra:
+        return cmd_retrain(args)
+    if args.base:
+        raise InputError("--base names the model that --extra retrains; give --extra DATASET... too")
+    for name, value in DEFAULTS.items():
+        if getattr(args, name) is None:
+            setattr(args, name, value)
+    return cmd_train_new(args)
+
+
+def cmd_train_new(args) -> int:
     from ..reference.model import default_model_dir
     from ..reference.training import train_reference
-    from ..render import open_renderer
+    from ..render import RENDERER_VERSION, open_renderer
     from ..space import load_space
 
     if args.n < 10 or args.held_out < 1:
@@ -49,14 +75,44 @@ def cmd_train(args) -> int:
     renderer = renderer_for(args.preset)
     try:
         card = train_reference(space, renderer, out, args.workdir, args.n, args.held_out, args.seed, args.preset,
-                               other_presets=checks, renderer_for=renderer_for)
+                               other_presets=checks, renderer_for=renderer_for, renderer_version=RENDERER_VERSION)
     finally:
         renderer.close()
     print(json.dumps(card["held_out"]["per_feature"], indent=2))
-    print(f"model and card written to {out}")
-    if out.resolve() != default_model_dir().resolve():
-        print(f"use it with: isu-validate run --sut reference --sut-option model_dir={out}")
+    _print_written(out, default_model_dir())
     return 0
+
+
+def cmd_retrain(args) -> int:
+    from ..reference.model import default_model_dir
+    from ..dataset.folder import open_dataset
+    from ..reference.extra_data import extra_set
+    from ..reference.retrain import retrain_with_extra
+    from ..render import RENDERER_VERSION
+    from ..space import load_space
+
+    given = [f"--{name.replace('_', '-')}" for name in FROM_SCRATCH
+             if getattr(args, name) not in (None, [])]
+    if given:
+        raise InputError(f"--extra keeps the --base model's scenes, seed, preset and held-out set: "
+                         f"{', '.join(given)} do not apply (train a new base without --extra)")
+    space = load_space(args.space)
+    out = args.out or args.workdir / "model-extra"
+    extra = []
+    for folder in args.extra:
+        dataset = open_dataset(folder)
+        extra.append(extra_set(folder, dataset.info(), dataset.metadata(), space))
+    card = retrain_with_extra(space, args.base or default_model_dir(), extra, out, RENDERER_VERSION,
+                              cache_dir=args.workdir / "extra-features")
+    print((out / "MODEL_CARD.md").read_text())
+    _print_written(out, default_model_dir())
+    return 0 if card else 1
+
+
+def _print_written(out: Path, shipped: Path) -> None:
+    print(f"model and card written to {out}")
+    if out.resolve() != shipped.resolve():
+        print(f"use it with: isu-validate run --sut reference --sut-option model_dir={out}")
 
 
 def parse_check(spec: str, held_out: int) -> tuple[str, int]:

@@ -5,14 +5,16 @@ import json
 import sys
 from pathlib import Path
 
-from ..errors import InputNotFound, UserError
+from ..errors import UserError
 
 
 def register(sub) -> None:
     p = sub.add_parser("render", help="render scenes with Blender (one scene file, or --random N)",
                        description="Render a scene JSON to a PNG, or N random valid scenes of the space "
                                    "into a folder with a contact sheet. Timings go to stderr.")
-    p.add_argument("scene", nargs="?", type=Path, help="scene JSON: {feature: value, ...}")
+    p.add_argument("scene", nargs="?", type=Path,
+                   help="scene JSON: {feature: value, ...}, or a run's label file (labels/<test>.json, "
+                        "a pair's scene.json)")
     p.add_argument("--out", type=Path, required=True, help="output PNG (one scene) or folder (--random)")
     p.add_argument("--random", type=int, metavar="N", help="render N random valid scenes instead of a file")
     p.add_argument("--seed", type=int, default=0, help="seed of the random scenes (default 0)")
@@ -43,7 +45,7 @@ def run(args) -> int:
     from ..protocols import RenderError
     from ..render import open_renderer
     from ..render.visibility import parse_min_visible
-    from ..space import load_space
+    from ..space import load_space, read_scene_file
 
     if (args.scene is None) == (args.random is None):
         raise UserError("give either a SCENE.json or --random N")
@@ -54,12 +56,7 @@ def run(args) -> int:
                   for i, s in enumerate(space.sample(np.random.default_rng(args.seed), args.random))]
         targets = [(folder / f"{name}.png", scene) for name, scene in scenes]
     else:
-        if not args.scene.is_file():
-            raise InputNotFound(f"scene file {args.scene} does not exist")
-        try:
-            scene = json.loads(args.scene.read_text())
-        except json.JSONDecodeError as exc:
-            raise UserError(f"{args.scene} is not valid JSON: {exc}") from None
+        scene = read_scene_file(args.scene)   # a plain scene, or a run's label file (a pair's scene.json)
         space.check(scene)  # a clear error before Blender starts
         folder = args.out.parent
         targets = [(args.out, scene)]

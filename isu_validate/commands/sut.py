@@ -69,19 +69,6 @@ def parse_options(pairs: list[str]) -> dict[str, str]:
     return options
 
 
-def load_scene(path: Path) -> dict[str, Any]:
-    if not path.is_file():
-        raise InputNotFound(f"scene file {path} does not exist")
-    try:
-        data = json.loads(path.read_text())
-    except ValueError as exc:
-        raise InputError(f"{path}: not valid JSON ({exc})") from None
-    scene = data.get("scene", data) if isinstance(data, dict) else None
-    if not isinstance(scene, dict):
-        raise InputError(f"{path}: expected a scene object (feature -> value) or a label file with a 'scene' key")
-    return scene
-
-
 def all_questions(space) -> tuple[Question, ...]:
     """Every predicted feature, for a check without a scene (truth unknown)."""
     from ..space import Question
@@ -103,13 +90,13 @@ def _check_image(path: Path) -> None:
 def check_command(args) -> int:
     from ..evaluate import make_judge
     from ..protocols import SUTRequest
-    from ..space import load_space
+    from ..space import load_space, read_scene_file
     from ..sut import build_request, open_sut
     from ..sut.prompt import vqa_prompt
 
     _check_image(args.image)
     space = load_space(args.space)
-    scene = space.check(load_scene(args.scene)) if args.scene else None
+    scene = space.check(read_scene_file(args.scene)) if args.scene else None
     if scene is not None:
         request = build_request(space, scene, args.image, args.mode, args.prompt, args.prompt_style)
     elif args.mode == "vqa":

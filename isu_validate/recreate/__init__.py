@@ -3,23 +3,30 @@
     plan = plan_recreation(["runs/nsga2-s1"], mode="mixed", n=12, seed=0, out="pairs/")
 
 Rooms: ``select`` (which tests), ``effort`` (change costs and the order), ``guide`` (the checklist
-in words and measurements), ``sketch`` (top view), ``sheet`` (printable HTML). The pairs layout
-itself is ``isu_validate.pairs``.
+in words and measurements), ``body`` (a weight class in kilograms at the rendered height), ``light``
+(what the light levels mean), ``aim`` (where the camera points), ``pictures`` (the scene rendered for
+print, crops), ``sketch`` (top view), ``sheet`` (printable HTML). The pairs layout itself is
+``isu_validate.pairs``.
 """
 from __future__ import annotations
 
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Callable
 
 from ..analysis.runs import Run, load_run, name_uniquely
 from ..archive import find_runs
 from ..pairs import PairsDir, PairsError, Sample
+from ..protocols import RenderError
 from ..space import SceneSpace, SpaceError, load_space
+from .aim import camera_aim
 from .effort import EffortModel, best_order, load_effort, path_cost
 from .guide import checklist
+from .light import light_rows
+from .pictures import RUN_FRAME, SHEET_PRESET, Picture, Pictures, Setup, sheet_crops
 from .select import Candidate, select
-from .sheet import SheetInfo, overview_html, page, relative, sheet_html
+from .sheet import SheetContent, SheetInfo, overview_html, page, relative, sheet_html
 from ..errors import InputError
 
 __all__ = ["RecreatePlan", "recreate"]
@@ -41,14 +48,18 @@ class RecreatePlan:
 
 def plan_recreation(runs: list[str | os.PathLike], mode: str, n: int, seed: int, out: str | os.PathLike,
              failing_share: float | None = None, effort: str | os.PathLike = "default",
-             cabin: str | os.PathLike | None = None) -> RecreatePlan:
+             cabin: str | os.PathLike | None = None, sheet_preset: str = SHEET_PRESET,
+             open_renderer: Callable | None = None) -> RecreatePlan:
     """Pick ``n`` tests of ``runs`` (``mode``: failing, passing or mixed) for a lab to recreate, order them
     by the effort of changing one scene into the next, and write a new pairs directory ``out`` with a
-    printable sheet per scene (``isu-validate recreate``).
+    printable sheet per scene (``isu-validate recreate``). Each sheet's picture is the scene rendered
+    again at ``sheet_preset`` (640 px wide or more; ``"run"``: the run's own frame, no Blender);
+    ``open_renderer`` replaces ``isu_validate.render.open_renderer`` for that.
 
         plan = plan_recreation(["runs/nsga2-s1"], "mixed", n=12, seed=0, out="pairs/")
         plan.samples, plan.minutes
     """
+    _check_preset(sheet_preset)
     pairs = PairsDir(out)
     if pairs.root.exists() and any(pairs.root.iterdir()):
         raise PairsError(f"{pairs.root} is not empty; recreate writes a new pairs directory (choose another --out, "
@@ -66,8 +77,19 @@ def plan_recreation(runs: list[str | os.PathLike], mode: str, n: int, seed: int,
                         path_cost(setup, cost, list(range(len(scenes)))), method, list(chosen.notes))
     plan.notes += [f"effort file {model.source} names features this space does not have: {', '.join(model.unused)}"
                    ] if model.unused else []
-    _write(pairs, space, model, cabin_rig, [chosen.chosen[i] for i in order], plan)
+    pictures = Pictures(sheet_preset, open_renderer)
+    try:
+        _write(pairs, space, model, cabin_rig, [chosen.chosen[i] for i in order], plan, pictures)
+    finally:
+        pictures.close()
     return plan
+
+
+def _check_preset(name: str) -> None:
+    from ..render.presets import PRESETS
+    if name != RUN_FRAME and name not in PRESETS:
+        raise InputError(f"unknown --sheet-preset {name!r}; use a render preset ({', '.join(PRESETS)}) or "
+                         f"{RUN_FRAME!r} (the run's own frames, no Blender)")
 
 
 def _space(runs: list[Run]) -> SceneSpace:
@@ -100,10 +122,22 @@ def _camera_file(run: Run) -> Path | None:
         return None
 
 
+def _setup(run: Run, space: SceneSpace, notes: list[str]) -> Setup | None:
+    """The run's camera (pose from --extrinsics-from applied), cabin and visibility thresholds."""
+    from capture.camera import load_render_camera
+    pipeline = run.pipeline
+    try:
+        camera = load_render_camera(pipeline.get("camera", "default"), pipeline.get("extrinsics_from"))
+    except (ValueError, FileNotFoundError) as exc:   # CameraFileError is a ValueError
+        notes.append(f"{run.name}: its camera cannot be read ({exc}); its sheets show the run's frames and no aim")
+        return None
+    return Setup(camera, pipeline.get("cabin", "default"), space, pipeline.get("min_visible") or {})
+
+
 def _write(pairs: PairsDir, space: SceneSpace, model: EffortModel, cabin: dict, ordered: list[Candidate],
-           plan: RecreatePlan) -> None:
+           plan: RecreatePlan, pictures: Pictures) -> None:
     width = max(2, len(str(len(ordered))))
-    sheets, previous = [], None
+    sheets, previous, setups = [], None, {}
     for k, cand in enumerate(ordered, 1):
         camera = _camera_file(cand.run)
         if camera is None:
@@ -111,16 +145,18 @@ def _write(pairs: PairsDir, space: SceneSpace, model: EffortModel, cabin: dict, 
                               "samples have no camera.toml")
         sample = pairs.new_sample(f"S{k:0{width}d}", cand.label_file, cand.image, camera, cand.render_label)
         scene = cand.record.canonical
+        if cand.run.name not in setups:
+            setups[cand.run.name] = _setup(cand.run, space, plan.notes)
+        setup = setups[cand.run.name]
         changed = model.changed(previous, scene)
         info = SheetInfo(k, len(ordered), f"{cand.run.name} test {cand.record.test_id}", cand.failed,
                          [g.note or g.name for g in changed] if previous is not None else [],
                          model.step(previous, scene))
-        items = checklist(space, scene, cabin)
-        camera_text, camera_xy = _camera(sample)
+        picture = _picture(pictures, sample, scene, setup, plan.notes)
+        content = sheet_content(sample, space, cabin, info, picture, setup)
         sample.sheet.write_text(page(f"{sample.name} recreation sheet",
-                                     sheet_html(sample, items, cabin, info, sample.sim.name, camera_text, camera_xy)))
-        sheets.append(sheet_html(sample, items, cabin, info, relative(sample.sim, pairs.root), camera_text,
-                                 camera_xy))
+                                     sheet_html(content, relative(picture.image, sample.path))))
+        sheets.append(sheet_html(content, relative(picture.image, pairs.root)))
         plan.samples.append({"sample": sample.name, "position": k, "run": str(cand.run.path),
                              "test_id": cand.record.test_id, "failed": cand.failed,
                              "fitness": cand.record.primary, "source": info.source,
@@ -129,20 +165,39 @@ def _write(pairs: PairsDir, space: SceneSpace, model: EffortModel, cabin: dict, 
     effort = {"minutes": plan.minutes, "run_order_minutes": plan.run_order_minutes, "source": model.source,
               "method": plan.method, "per_scene": model.per_scene}
     pairs.write_manifest({"samples": plan.samples, "effort": effort, "notes": plan.notes,
-                          "space": space.name, "space_hash": space.hash})
+                          "space": space.name, "space_hash": space.hash, "sheet_preset": pictures.preset})
     pairs.index_file.write_text(page("Recreation sheets", overview_html(plan.samples, effort, plan.notes)
                                                 + "".join(sheets)))
 
 
-def _camera(sample: Sample) -> tuple[str, tuple[float, float] | None]:
-    """Where the camera is, in words and on the sketch (from the sample's camera.toml)."""
-    if not sample.camera.is_file():
-        return "no camera file", None
-    from capture.camera import load_camera
+def sheet_content(sample: Sample, space: SceneSpace, cabin: dict, info: SheetInfo, picture: Picture,
+                  setup: Setup | None) -> SheetContent:
+    """What one sample's sheet shows: its checklist (the features its render hid flagged), the camera's aim,
+    the light levels, the picture and its crops."""
+    scene = sample.scene()
+    items = checklist(space, scene, cabin, _hidden(sample))
+    return SheetContent(sample.name, sample.path, info, items, cabin, picture,
+                        camera_aim(setup.camera) if setup else None, _camera_name(setup),
+                        light_rows(space, scene, cabin), sheet_crops(items, picture))
+
+
+def _picture(pictures: Pictures, sample: Sample, scene: dict, setup: Setup | None, notes: list[str]) -> Picture:
+    """The sheet's picture; the run's frame when the render for the sheet fails (named in the notes)."""
     try:
-        rig = load_camera(sample.camera)
-    except ValueError as exc:    # CameraFileError names the problem; a bad number in the file is a ValueError
-        return f"camera.toml unreadable ({exc})", None
-    x, y, z = rig.position
-    return (f"{rig.name} ({rig.width}x{rig.height}) at x = {x:+.2f} m, y = {y:+.2f} m, z = {z:.2f} m, "
-            "as in camera.toml"), (x, y)
+        return pictures.picture(sample, scene, setup)
+    except RenderError as exc:
+        notes.append(f"{sample.name}: the sheet's picture could not be rendered ({exc}); it shows the run's frame")
+        return pictures.picture(sample, scene, None)
+
+
+def _hidden(sample: Sample) -> dict[str, float]:
+    """Features the run's render hid (its label's ``occluded``), with their visible share."""
+    label = sample.label()
+    shares = label.get("visibility") or {}
+    return {name: float(shares.get(name, 0.0)) for name in label.get("occluded") or ()}
+
+
+def _camera_name(setup: Setup | None) -> str:
+    if setup is None:
+        return "no camera file"
+    return f"{setup.camera.name} ({setup.camera.width}x{setup.camera.height}, camera.toml)"

@@ -12,6 +12,7 @@ from typing import Any, Mapping
 
 from ..space import SceneSpace
 from ..space.features import Feature
+from .body import weight_at_height
 
 AXES = "x forward, y left, z up; origin on the centre line, floor level, at the centre of the front seat cushions"
 
@@ -31,6 +32,7 @@ class Item:
     text: str
     placement: Placement | None = None
     crop_parts: tuple[str, ...] = ()
+    hidden: float | None = None      # the visible share when the render hid it (occluded: set, never judged)
 
 
 def readable(feature: Feature, value: Any) -> str:
@@ -47,22 +49,35 @@ def readable(feature: Feature, value: Any) -> str:
     return text.replace("_", " ").lower() if words else text
 
 
-def checklist(space: SceneSpace, scene: Mapping[str, Any], cabin: dict) -> list[Item]:
-    """One item per active feature of the scene, in the space's order."""
+def checklist(space: SceneSpace, scene: Mapping[str, Any], cabin: dict,
+              hidden: Mapping[str, float] | None = None) -> list[Item]:
+    """One item per active feature of the scene, in the space's order. ``hidden``: the features the
+    render marked occluded, with their visible share (the run's label: ``occluded``, ``visibility``)."""
     canonical = space.canonical(scene)
     rules = cabin.get("recreate", {}) if isinstance(cabin.get("recreate"), dict) else {}
+    hidden = hidden or {}
     items = []
     for name, value in canonical.items():
         feature = space.features[name]
         rule = rules.get(name, {})
-        text = readable(feature, value)
+        text = _words(feature, value, rule, canonical)
         note = (rule.get("notes") or {}).get(str(value))
         if note and note not in text:
             text = f"{text} ({note})"
         crop = tuple(getattr(feature, "visible_parts", ()) or rule.get("crop", ()))
-        items.append(Item(name, feature.display_name, text, _placement(rule, value, cabin), crop))
+        items.append(Item(name, feature.display_name, text, _placement(rule, value, cabin), crop, hidden.get(name)))
     _apply_turns(items, rules, canonical)
     return items
+
+
+def _words(feature: Feature, value: Any, rule: Mapping, canonical: Mapping[str, Any]) -> str:
+    """The value in words; a weight class as kilograms at the rendered stature when the rig links the two."""
+    height_feature = rule.get("weight_at_height_of")
+    if height_feature in canonical:
+        text = weight_at_height(str(value), str(canonical[height_feature]))
+        if text:
+            return text
+    return readable(feature, value)
 
 
 def _placement(rule: Mapping, value: Any, cabin: dict) -> Placement | None:

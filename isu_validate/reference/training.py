@@ -21,6 +21,7 @@ import numpy as np
 from ..progress import Progress
 from ..space import SceneSpace
 from .backbone import Backbone, read_rgb
+from .feature_bank import FILES, FeatureSet, save_bank
 from .heads import Head, fit_head, save_heads
 from ..errors import InputError
 
@@ -107,34 +108,42 @@ def render_examples(space: SceneSpace, scenes: list[dict], renderer, folder: Pat
 
 
 def embed(backbone: Backbone, examples: list[Example]) -> np.ndarray:
-    return backbone.features([read_rgb(e.image) for e in examples])
+    return embed_images(backbone, [e.image for e in examples])
 
 
-def fit_heads(space: SceneSpace, X: np.ndarray, examples: list[Example], seed: int) -> list[Head]:
+def embed_images(backbone: Backbone, images: list[Path], chunk: int = 64) -> np.ndarray:
+    """Features of image files, read a chunk at a time (a large set never sits in memory whole)."""
+    parts = [backbone.features([read_rgb(path) for path in images[i:i + chunk]])
+             for i in range(0, len(images), chunk)]
+    return np.concatenate(parts) if parts else np.zeros((0, backbone.dim), np.float32)
+
+
+def fit_heads(space: SceneSpace, X: np.ndarray, scenes: list[dict], seed: int) -> list[Head]:
+    """One head per predicted feature, on the rows whose scene has it (a scene's label)."""
     heads = []
     for feature in space.predicted:
-        rows = [i for i, e in enumerate(examples) if feature.name in e.scene]
+        rows = [i for i, scene in enumerate(scenes) if feature.name in scene]
         if not rows:
             raise InputError(f"no training scene has feature {feature.name!r} active; use a larger --n")
-        labels = [feature.truth(examples[i].scene[feature.name]) for i in rows]
+        labels = [feature.truth(scenes[i][feature.name]) for i in rows]
         heads.append(fit_head(feature.name, X[rows], labels, seed=seed))
     return heads
 
 
-def accuracy(space: SceneSpace, heads: list[Head], X: np.ndarray, examples: list[Example]) -> dict:
+def accuracy(space: SceneSpace, heads: list[Head], X: np.ndarray, scenes: list[dict]) -> dict:
     """Per-feature held-out accuracy, overall and split by external light level."""
     by_light: dict[str, dict[str, list[bool]]] = defaultdict(lambda: defaultdict(list))
     overall: dict[str, list[bool]] = defaultdict(list)
     for head in heads:
         feature = space.features[head.feature]
-        rows = [i for i, e in enumerate(examples) if head.feature in e.scene]
+        rows = [i for i, scene in enumerate(scenes) if head.feature in scene]
         if not rows:
             continue
         predicted = head.predict(X[rows])
         for i, answer in zip(rows, predicted):
-            correct = answer == feature.truth(examples[i].scene[head.feature])
+            correct = answer == feature.truth(scenes[i][head.feature])
             overall[head.feature].append(correct)
-            by_light[examples[i].scene.get("external_light", "-")][head.feature].append(correct)
+            by_light[scenes[i].get("external_light", "-")][head.feature].append(correct)
     summarise = lambda d: {k: {"accuracy": float(np.mean(v)), "n": len(v)} for k, v in d.items()}  # noqa: E731
     return {"per_feature": summarise(overall),
             "by_external_light": {light: summarise(d) for light, d in sorted(by_light.items())}}
@@ -143,10 +152,11 @@ def accuracy(space: SceneSpace, heads: list[Head], X: np.ndarray, examples: list
 def train_reference(space: SceneSpace, renderer, out: Path, workdir: Path, n_train: int, n_test: int,
                     seed: int, preset: str, backbone: Backbone | None = None,
                     other_presets: Mapping[str, int] | None = None,
-                    renderer_for: Callable[[str], object] | None = None) -> dict:
-    """Render, embed, fit and write the heads and the model card. ``other_presets`` maps a preset
-    name to how many of the held-out scenes to render at it as well (``renderer_for(name)`` opens
-    a renderer for it, closed here)."""
+                    renderer_for: Callable[[str], object] | None = None, renderer_version: str = "") -> dict:
+    """Render, embed, fit and write the heads, the model card and the features of both sets (so that
+    ``reference train --extra`` never renders them again). ``other_presets`` maps a preset name to how
+    many of the held-out scenes to render at it as well (``renderer_for(name)`` opens a renderer for
+    it, closed here)."""
     start = time.time()
     train_scenes = balanced_scenes(space, n_train, np.random.default_rng(seed))
     test_scenes = balanced_scenes(space, n_test, np.random.default_rng(seed + 10_000))
@@ -155,21 +165,42 @@ def train_reference(space: SceneSpace, renderer, out: Path, workdir: Path, n_tra
     others = {name: _render_at(name, space, test_scenes[:n], renderer_for, workdir)
               for name, n in (other_presets or {}).items() if name != preset}
     backbone = backbone or Backbone()
-    X_train, X_test = embed(backbone, train), embed(backbone, test)
-    heads = fit_heads(space, X_train, train, seed)
-    by_preset = {preset: accuracy(space, heads, X_test, test)}
-    by_preset.update({name: accuracy(space, heads, embed(backbone, examples), examples)
-                      for name, examples in others.items()})
-    card = {"backbone": backbone.name, "input_size": list(backbone.size), "space": space.name,
-            "space_hash": space.hash, "training_scenes": n_train, "held_out_scenes": n_test, "seed": seed,
-            "render_preset": preset, "train_seconds": round(time.time() - start, 1),
-            "held_out": by_preset[preset], "held_out_by_preset": by_preset,
-            "held_out_scenes_by_preset": {preset: n_test, **{k: len(v) for k, v in others.items()}},
-            "training": accuracy(space, heads, X_train, train)["per_feature"]}
-    save_heads(heads, out, {k: card[k] for k in ("backbone", "input_size", "space", "space_hash", "seed")})
-    (out / "model_card.json").write_text(json.dumps(card, indent=2))
-    (out / "MODEL_CARD.md").write_text(model_card_markdown(card))
+    made_with = {"space": space.name, "space_hash": space.hash, "renderer": renderer_version, "preset": preset,
+                 "backbone": backbone.name, "input_size": list(backbone.size), "seed": seed}
+    bank = [FeatureSet(embed(backbone, part), [e.scene for e in part], dict(made_with, scenes_seed=scenes_seed))
+            for part, scenes_seed in ((train, seed), (test, seed + 10_000))]
+    heads, card = fit_and_describe(space, bank[0], bank[1], seed, {
+        name: (embed(backbone, examples), [e.scene for e in examples]) for name, examples in others.items()})
+    card.update({"render_preset": preset, "renderer": renderer_version,
+                 "train_seconds": round(time.time() - start, 1)})
+    write_model(out, heads, card, bank)
     return card
+
+
+def fit_and_describe(space: SceneSpace, train: FeatureSet, held_out: FeatureSet, seed: int,
+                     others: Mapping[str, tuple[np.ndarray, list[dict]]] | None = None) -> tuple[list[Head], dict]:
+    """Fit the heads on ``train``; the card's accuracies on ``held_out`` (and on ``others``: the held-out
+    scenes rendered at other presets, {preset: (features, scenes)})."""
+    preset = held_out.meta["preset"]
+    heads = fit_heads(space, train.features, train.scenes, seed)
+    by_preset = {preset: accuracy(space, heads, held_out.features, held_out.scenes)}
+    by_preset.update({name: accuracy(space, heads, X, scenes) for name, (X, scenes) in (others or {}).items()})
+    card = {"backbone": train.meta["backbone"], "input_size": train.meta["input_size"], "space": space.name,
+            "space_hash": space.hash, "training_scenes": len(train.scenes), "held_out_scenes": len(held_out.scenes),
+            "seed": seed, "render_preset": preset, "held_out": by_preset[preset], "held_out_by_preset": by_preset,
+            "held_out_scenes_by_preset": {name: len(scenes) for name, (_, scenes) in
+                                          {preset: (None, held_out.scenes), **(others or {})}.items()},
+            "training": accuracy(space, heads, train.features, train.scenes)["per_feature"]}
+    return heads, card
+
+
+def write_model(out: Path, heads: list[Head], card: dict, bank: list[FeatureSet] | None,
+                markdown: Callable[[dict], str] | None = None) -> None:
+    save_heads(heads, out, {k: card[k] for k in ("backbone", "input_size", "space", "space_hash", "seed")})
+    if bank:
+        save_bank(out, *bank)
+    (out / "model_card.json").write_text(json.dumps(card, indent=2))
+    (out / "MODEL_CARD.md").write_text((markdown or model_card_markdown)(card))
 
 
 def _render_at(preset: str, space: SceneSpace, scenes: list[dict], renderer_for, workdir: Path) -> list[Example]:
@@ -202,6 +233,9 @@ def model_card_markdown(card: dict) -> str:
              f"- Held-out set: {card['held_out_scenes']} scenes, seed {card['seed'] + 10_000}{also}",
              f"- Reproduce: `isu-validate reference train --n {card['training_scenes']} "
              f"--held-out {card['held_out_scenes']} --seed {card['seed']} --preset {card['render_preset']}{reproduce}`",
+             f"- Stored features: `{FILES['train']}` and `{FILES['held_out']}` hold the backbone features (float32), "
+             "scenes and renderer version of both sets, so `isu-validate reference train --extra DATASET...` "
+             "retrains on them plus the dataset without rendering them again, and compares on the same held-out scenes",
              "", "## Held-out accuracy per feature", "",
              "| feature | " + " | ".join(f"{p} | n" for p in presets) + " | training accuracy |",
              "|---|" + "---|---|" * len(presets) + "---|"]

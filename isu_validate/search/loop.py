@@ -49,7 +49,9 @@ class RunSummary:
 
 
 def _versions() -> dict:
-    out = {"python": platform.python_version()}
+    from ..render.renderer import RENDERER_VERSION   # `replay` re-renders a lost frame only with the same one
+
+    out = {"python": platform.python_version(), "renderer": RENDERER_VERSION}
     for name in ("isu-validate", "pymoo", "numpy", "bpy", "torch"):
         try:
             out[name] = version(name)

@@ -87,7 +87,7 @@ class SceneSpace:
     # ------------------------------------------------------------------ validity
     def violations(self, scene: Mapping[str, Any]) -> list[str]:
         """Everything wrong with a scene, as messages that name the feature."""
-        problems = [f"unknown feature {k!r} (known: {', '.join(self.names)})" for k in scene if k not in self.features]
+        problems = self._unknown(scene)
         seen: Scene = {}
         for name, feature in self.features.items():
             if not feature.is_active(seen):
@@ -103,6 +103,14 @@ class SceneSpace:
             return problems
         canonical = self.canonical(scene)
         return [f"constraint broken: {c.name}" for c in self.constraints if not c.holds(canonical)]
+
+    def _unknown(self, scene: Mapping[str, Any]) -> list[str]:
+        """One message for all unknown keys: the known list once, however many keys are wrong."""
+        unknown = [repr(k) for k in scene if k not in self.features]
+        if not unknown:
+            return []
+        which = f"feature {unknown[0]}" if len(unknown) == 1 else f"features {', '.join(unknown)}"
+        return [f"unknown {which} (known: {', '.join(self.names)})"]
 
     def is_valid(self, scene: Mapping[str, Any]) -> bool:
         return not self.violations(scene)

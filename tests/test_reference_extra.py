@@ -1,0 +1,151 @@
+"""``reference train --extra``: retraining on a model's stored features plus a dataset's images, without
+rendering the base set again (painted images, no Blender); and the shipped features are the ones the
+shipped heads were fitted on."""
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from isu_validate.cli import main
+from isu_validate.reference import retrain as retrain_module
+from isu_validate.reference.backbone import Backbone
+from isu_validate.reference.feature_bank import load_bank, load_feature_set
+from isu_validate.reference.heads import load_heads
+from isu_validate.reference.model import default_model_dir
+from isu_validate.reference.retrain import retrain_with_extra
+from isu_validate.reference.training import accuracy, fit_heads, train_reference
+from isu_validate.render import RENDERER_VERSION
+from isu_validate.space import load_space
+from tests.test_reference import PatchPainter
+
+SPACE = load_space()
+
+
+@pytest.fixture(scope="module")
+def backbone():
+    return Backbone(160, 120, threads=2)
+
+
+@pytest.fixture(scope="module")
+def base(tmp_path_factory, backbone):
+    folder = tmp_path_factory.mktemp("base")
+    train_reference(SPACE, PatchPainter(), folder / "model", folder / "work", n_train=40, n_test=20, seed=3,
+                    preset="painted", backbone=backbone, renderer_version=RENDERER_VERSION)
+    return folder / "model"
+
+
+def make_dataset(folder: Path, n: int = 5, space_name: str = SPACE.name, space_hash: str = SPACE.hash,
+                 occluded: tuple[str, ...] = ()) -> Path:
+    """A dataset folder as `isu-validate dataset` writes it, painted."""
+    (folder / "images").mkdir(parents=True)
+    rows = []
+    for i, scene in enumerate(SPACE.sample(np.random.default_rng(11), n)):
+        canonical = SPACE.canonical(scene)
+        PatchPainter().render(canonical, folder / "images" / f"{i:05d}.png")
+        rows.append({"file_name": f"images/{i:05d}.png", "scene": canonical, "variant": "render",
+                     "truth": {q.key: q.truth for q in SPACE.questions(canonical)}, "occluded": list(occluded)})
+    (folder / "metadata.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows))
+    (folder / "dataset.json").write_text(json.dumps({"format": "isu-validate-dataset/1", "complete": True,
+                                                     "space": space_name, "space_hash": space_hash,
+                                                     "versions": {"renderer": RENDERER_VERSION}}))
+    return folder
+
+
+@pytest.fixture
+def same_backbone(monkeypatch, backbone):
+    monkeypatch.setattr(retrain_module, "Backbone", lambda *size: backbone)
+
+
+def test_extra_retrains_on_the_stored_features_and_compares_on_the_same_held_out_scenes(
+        tmp_path, base, same_backbone, capsys):
+    dataset = make_dataset(tmp_path / "ds", occluded=("tshirt_colour",))
+    out = tmp_path / "retrained"
+    assert main(["reference", "train", "--extra", str(dataset), "--base", str(base), "--out", str(out),
+                 "--workdir", str(tmp_path / "w")]) == 0
+    card = json.loads((out / "model_card.json").read_text())
+    base_card = json.loads((base / "model_card.json").read_text())
+    assert card["training_scenes"] == 45 and card["base_training_scenes"] == 40
+    assert card["held_out_scenes"] == 20                      # the base's held-out scenes, nothing else
+    assert card["extra"] == [{"dataset": str(dataset), "images": 5, "labels_left_out": 5}]
+    for name, row in card["comparison"].items():              # the base evaluated on the same stored features
+        assert row["base"] == base_card["held_out"]["per_feature"][name]["accuracy"]
+        assert row["change"] == pytest.approx(row["retrained"] - row["base"])
+    assert set(card["comparison"]) == set(base_card["held_out"]["per_feature"])
+    text = (out / "MODEL_CARD.md").read_text()
+    assert "| feature | base | retrained | change | n |" in text and "Worst change" in text
+    assert "model_dir=" in capsys.readouterr().out
+    assert len(load_feature_set(out / "train_features.npz").scenes) == 45   # it can be a base in turn
+    # the occluded T-shirt colour is not learnt from: 40 base rows + 0 of the dataset's
+    heads, _ = load_heads(out)
+    assert {h.feature for h in heads} == {f.name for f in SPACE.predicted}
+
+
+def test_a_second_retrain_of_the_same_dataset_embeds_nothing(tmp_path, base, same_backbone, monkeypatch):
+    dataset = make_dataset(tmp_path / "ds")
+    args = ["reference", "train", "--extra", str(dataset), "--base", str(base), "--workdir", str(tmp_path / "w")]
+    assert main(args + ["--out", str(tmp_path / "a")]) == 0
+
+    def no_embedding(*a, **k):
+        raise AssertionError("embedded the dataset again")
+
+    monkeypatch.setattr(retrain_module, "embed_images", no_embedding)
+    assert main(args + ["--out", str(tmp_path / "b")]) == 0
+    assert (tmp_path / "a" / "heads.npz").read_bytes() == (tmp_path / "b" / "heads.npz").read_bytes()
+
+
+def test_a_dataset_of_another_space_is_refused_naming_both(tmp_path, base, capsys):
+    dataset = make_dataset(tmp_path / "ds", space_name="my-cabin", space_hash="0123456789abcdef")
+    assert main(["reference", "train", "--extra", str(dataset), "--base", str(base),
+                 "--out", str(tmp_path / "m")]) == 2
+    err = capsys.readouterr().err
+    assert "'my-cabin' (hash 0123456789abcdef)" in err and f"'isu-paper' (hash {SPACE.hash})" in err
+    assert err.count("\n") == 1 and not (tmp_path / "m").exists()
+
+
+def test_features_of_another_renderer_are_not_reused(tmp_path, base):
+    import shutil
+
+    old = tmp_path / "old"
+    shutil.copytree(base, old)
+    with pytest.raises(ValueError, match="renderer 'isu-blender-5'.*current renderer is 'isu-blender-99'"):
+        load_bank(old, SPACE, "isu-blender-99")
+
+
+@pytest.mark.parametrize("option", [["--n", "50"], ["--seed", "0"], ["--check-preset", "standard"]])
+def test_options_of_a_new_training_do_not_apply_to_extra(tmp_path, option, capsys):
+    assert main(["reference", "train", "--extra", str(tmp_path), *option]) == 2
+    assert "do not apply" in capsys.readouterr().err
+
+
+def test_no_extra_data_gives_the_base_heads_again(tmp_path, base, backbone):
+    retrain_with_extra(SPACE, base, [], tmp_path / "again", RENDERER_VERSION, backbone=backbone)
+    before, _ = load_heads(base)
+    after, _ = load_heads(tmp_path / "again")
+    for a, b in zip(before, after):
+        assert a.classes == b.classes and np.allclose(a.weight, b.weight, atol=1e-5)
+
+
+def test_the_shipped_features_are_those_the_shipped_heads_were_fitted_on():
+    """Refitting three heads on the shipped training features gives the shipped heads bit for bit and their
+    held-out accuracies (all 14 do; three keep the test quick)."""
+    model = default_model_dir()
+    train, held_out = load_bank(model, SPACE, RENDERER_VERSION)
+    assert (len(train.scenes), len(held_out.scenes)) == (600, 200)
+    shipped = {h.feature: h for h in load_heads(model)[0]}
+    card = json.loads((model / "model_card.json").read_text())["held_out"]["per_feature"]
+    names = ("tshirt_colour", "driver_gender", "luggage_position")
+    space = _only(names)
+    heads = fit_heads(space, train.features, train.scenes, seed=0)
+    refit = accuracy(space, heads, held_out.features, held_out.scenes)["per_feature"]
+    for head in heads:
+        assert refit[head.feature]["accuracy"] == pytest.approx(card[head.feature]["accuracy"])
+        assert np.array_equal(head.weight, shipped[head.feature].weight)
+        assert np.array_equal(head.mean, shipped[head.feature].mean)
+
+
+def _only(names):
+    """The space as fitting and scoring see it, with only ``names`` predicted (fewer heads: a quick test)."""
+    from types import SimpleNamespace
+
+    return SimpleNamespace(predicted=[SPACE.features[n] for n in names], features=SPACE.features)
