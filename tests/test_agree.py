@@ -288,3 +288,20 @@ def test_votes_are_asked_one_pair_at_a_time_and_saved_at_once(setup, monkeypatch
     assert (pairs / "review.html").is_file()
     assert "validity:" in capsys.readouterr().out
     assert main(["agree", "votes", str(pairs), "--annotator", "zoe", "--vote", "S01=perhaps"]) == 2
+
+
+def test_sut_options_reach_the_sut_and_a_malformed_one_is_one_line(tmp_path, monkeypatch, capsys):
+    import isu_validate.agree as agree_pkg
+    seen = {}
+
+    def measure(pairs, out, settings):
+        seen["options"] = settings.sut_options
+        raise SystemExit(0)
+    monkeypatch.setattr(agree_pkg, "measure_agreement", measure)
+    with pytest.raises(SystemExit):
+        main(["agree", str(tmp_path), "--sut", "reference", "--sut-option", "model_dir=models/retrained",
+              "--out", str(tmp_path / "out")])
+    assert seen["options"] == {"model_dir": "models/retrained"}
+    assert main(["agree", str(tmp_path), "--sut", "reference", "--sut-option", "model_dir",
+                 "--out", str(tmp_path / "out2")]) == 2
+    assert "must read NAME=VALUE" in capsys.readouterr().err and not (tmp_path / "out2").exists()

@@ -30,6 +30,8 @@ def register(sub) -> None:
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("target", nargs="+", metavar="PAIRS", help="pairs directory; or the word 'votes' and PAIRS")
     p.add_argument("--sut", help="SUT spec: reference, openai:MODEL@URL, command:PROGRAM ARGS..., http:URL")
+    p.add_argument("--sut-option", action="append", default=[], metavar="NAME=VALUE",
+                   help="adapter option, as for run (e.g. model_dir=DIR for a retrained reference ISU)")
     p.add_argument("--repeats", type=int, default=3, help="SUT queries per image, per-feature majority (default 3)")
     p.add_argument("--space", help="scene space (default: the one named in the samples' scene.json)")
     p.add_argument("--out", type=Path, help="report folder")
@@ -55,9 +57,11 @@ def run(args) -> int:
         raise InputError("usage: isu-validate agree PAIRS --sut SPEC --out DIR (see --help)")
     args.interrupted = INTERRUPTED.format(cache=args.out / "cache" / "sut")
     from ..agree import AgreeSettings, measure_agreement
+    from .sut import parse_options
     settings = AgreeSettings(sut=args.sut, repeats=args.repeats, space=args.space,
                              include_invalid=args.include_invalid, realism=not args.no_realism,
-                             threads=args.threads, feature_cache=args.feature_cache, sut_timeout_s=args.sut_timeout)
+                             threads=args.threads, feature_cache=args.feature_cache, sut_timeout_s=args.sut_timeout,
+                             sut_options=parse_options(args.sut_option))
     result = measure_agreement(args.target[0], args.out, settings)
     s = result.summary
     if args.json:

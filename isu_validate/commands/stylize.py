@@ -59,15 +59,17 @@ def register(sub) -> None:
     g = p.add_argument_group("gatys")
     g.add_argument("--size", type=int, default=192,
                    help="longer side optimised (default 192; output keeps the input size)")
-    g.add_argument("--style-size", type=int, default=None)
+    g.add_argument("--style-size", type=int, default=None,
+                   help="longer side of the style photos (gatys default: --size; fast net 256)")
     g.add_argument("--steps", type=int, default=None,
-                   help="gatys iterations (default 40) or fast-net training steps (default: the library's)")
+                   help="gatys iterations (default 40) or fast-net training steps (--method fast 220, train 300)")
     g.add_argument("--optimizer", choices=("lbfgs", "adam"), default="lbfgs")
     g.add_argument("--lr", type=float, default=None, help="Adam learning rate (gatys 0.02, train 1e-3)")
     g.add_argument("--content-layers", default="relu4_2")
     g.add_argument("--style-layers", default="relu1_1,relu2_1,relu3_1,relu4_1,relu5_1")
     g.add_argument("--content-weight", type=float, default=None, help="default 1")
-    g.add_argument("--style-weight", type=float, default=None, help="gatys default 10, train default 1")
+    g.add_argument("--style-weight", type=float, default=None,
+                   help="gatys default 10, --method fast 40 (content layer relu4_2), train 1 (relu2_2)")
     g.add_argument("--tv-weight", type=float, default=None, help="default 0")
     g.add_argument("--init", choices=("content", "noise"), default="content")
     g.add_argument("--pooling", choices=("avg", "max"), default="avg")
@@ -146,6 +148,8 @@ def _style_all(args, jobs, stylise, styles, report: Path, earlier: dict) -> tupl
             print(f"stylize: {i}/{len(jobs)} skipped {src}: cannot read it as an image ({reason})", file=sys.stderr)
             continue
         else:
+            stylise.prepare()  # the fast net's training is not one image's time
+            start = time.perf_counter()
             extra = stylise(src, dst)
         records.append(_record(src, dst, time.perf_counter() - start, {"source_sha256": digest, **extra},
                                measure if i - 1 in measured else None))
@@ -235,8 +239,10 @@ def _pairs_styles(root: Path) -> list[Path]:
 
 def _spread(n: int, k: int) -> set[int]:
     """Up to ``k`` of the indices 0..n-1, evenly spread, first and last included."""
+    if k <= 0:
+        return set()
     if n <= k:
-        return set(range(n)) if k > 0 else set()
+        return set(range(n))
     return {round(i * (n - 1) / (k - 1)) for i in range(k)} if k > 1 else {0}
 
 
@@ -289,6 +295,9 @@ class _Gatys:
     def settings(self) -> dict:
         return self._settings
 
+    def prepare(self) -> None:
+        pass
+
     def __call__(self, src: Path, dst: Path) -> dict:
         from PIL import Image
         self.used = True
@@ -302,14 +311,15 @@ class _Gatys:
         return {"loss_first": result.losses[0], "loss_last": result.losses[-1], "evaluations": len(result.losses)}
 
 
-def _train_config(args):
-    """--method fast's training settings: the library's defaults (``AUTO_TRAIN``) where no option is given."""
+def _train_config(args, base):
+    """Training settings: ``base`` where no option is given (``AUTO_TRAIN`` for --method fast, the
+    library's ``FastTrainConfig()`` for `stylize train`)."""
     from style_transfer.fast_net import FastNetConfig
-    from style_transfer.model_cache import AUTO_TRAIN as base
     net = FastNetConfig(_or(args.width, base.net.width), _or(args.blocks, base.net.blocks),
                         noise=base.net.noise and not args.no_noise)
     return replace(base, net=net, steps=args.steps or base.steps, batch_size=_or(args.batch_size, base.batch_size),
-                   crop=_or(args.crop, base.crop), content_weight=_or(args.content_weight, base.content_weight),
+                   crop=_or(args.crop, base.crop), style_size=_or(args.style_size, base.style_size),
+                   content_weight=_or(args.content_weight, base.content_weight),
                    style_weight=_or(args.style_weight, base.style_weight),
                    tv_weight=_or(args.tv_weight, base.tv_weight), lr=args.lr or base.lr, pooling=args.pooling,
                    seed=args.seed)
@@ -327,8 +337,8 @@ class _Fast:
             self.model = _given_model(args.model, styles)
             source = {"model": str(args.model), "model_sha256": _file_digest(args.model)}
         else:
-            from style_transfer.model_cache import model_key
-            self.cfg = _train_config(args)
+            from style_transfer.model_cache import AUTO_TRAIN, model_key
+            self.cfg = _train_config(args, AUTO_TRAIN)
             source = {"model_key": model_key(styles, self.cfg), "train": _plain_deep(self.cfg)}
         self._settings = {"method": "fast", **source, **_style_settings(styles),
                           "fast_size": self.size, "seed": args.seed}
@@ -344,14 +354,14 @@ class _Fast:
         return {**self._settings, "model": str(m.path), "model_from_cache": not m.trained,
                 "train_seconds": round(m.train_seconds, 1), **{k: v for k, v in m.meta.items() if k != "train"}}
 
-    def _net(self):
+    def prepare(self):
+        """Train or load the net (the first image needs it; a run whose images are all kept never does)."""
         if self.model is None:
             from style_transfer.model_cache import fast_model_for
             self.model = fast_model_for(self.styles, self.renders, self.cfg, self.args.model_cache, _train_progress)
             m = self.model
             print(f"stylize: fast net {'trained in %.0f s' % m.train_seconds if m.trained else 'from the cache'}"
                   f" ({m.path})", file=sys.stderr)
-        return self.model[0] if isinstance(self.model, tuple) else self.model.net
 
     def __call__(self, src: Path, dst: Path) -> dict:
         from style_transfer import stylize_fast
@@ -359,7 +369,9 @@ class _Fast:
         # noise seeded per image: reproducible, and not one pattern across a set (every pair's render is sim.png)
         seed = self.args.seed + zlib.crc32(f"{src.parent.name}/{src.name}".encode())
         self.used = True
-        save_image(stylize_fast(self._net(), load_image(src), seed, self.size), dst)
+        self.prepare()
+        net = self.model[0] if isinstance(self.model, tuple) else self.model.net
+        save_image(stylize_fast(net, load_image(src), seed, self.size), dst)
         return {"noise_seed": seed}
 
 
@@ -399,11 +411,12 @@ class _StyleMeasure:
     """Style distance of each render and its output to the style set (``style_transfer.distance``)."""
 
     def __init__(self, styles: list[Path]):
-        from style_transfer.distance import StyleDistance
-        self.distance = StyleDistance(styles)
+        self.styles, self.distance = styles, None
 
     def __call__(self, src: Path, dst: Path) -> dict:
-        from style_transfer.distance import gap_closed
+        from style_transfer.distance import StyleDistance, gap_closed
+        if self.distance is None:  # VGG and the photos' Grams only when an image is measured
+            self.distance = StyleDistance(self.styles)
         before, after = self.distance(src), self.distance(dst)
         return {"render_style_distance": before, "style_distance": after, "style_gap_closed": gap_closed(after, before)}
 
@@ -454,11 +467,11 @@ def _flips(args) -> dict:
 
 
 def _train(args) -> int:
-    from style_transfer import train_fast
+    from style_transfer import FastTrainConfig, train_fast
     from style_transfer.style_set import style_paths
     if len(args.images) != 1 or not (args.style and args.content and args.out):
         raise InputError("usage: isu-validate stylize train --style REAL.png --content RENDERS/ --out MODEL")
-    cfg = replace(_train_config(args), steps=args.steps or 300)
+    cfg = _train_config(args, FastTrainConfig())
     contents = _expand([str(args.content)])
     report = train_fast(style_paths(args.style), contents, args.out, cfg, resume=not args.no_resume,
                         progress=_train_progress)
