@@ -24,7 +24,7 @@ def register_bench(sub) -> None:
     p.add_argument("--preset", default="draft", help="render preset (default draft)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--check", type=int, default=3, help="images re-rendered to check their masks (default 3)")
-    p.add_argument("--out", type=Path, default=Path("bench-dataset"),
+    p.add_argument("--out", type=Path, default=Path("runs/bench-dataset"),
                    help="folder for the builds (each replaced by the next run of the bench)")
     p.add_argument("--json", type=Path, help="also write the rows here")
     p.set_defaults(func=run)

@@ -25,7 +25,7 @@ def register_bench(sub) -> None:
     p.add_argument("--drivers", type=int, default=6, help="seeded random drivers (default 6)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--rig", default="default")
-    p.add_argument("--out", type=Path, default=Path("bench-faces"), help="folder for frames, crops and faces.json")
+    p.add_argument("--out", type=Path, default=Path("runs/bench-faces"), help="folder for frames, crops and faces.json")
     p.set_defaults(func=run)
 
 

@@ -30,7 +30,7 @@ def register_bench(sub) -> None:
     p.add_argument("--threads", type=int, default=0, help="Cycles threads (0 = all cores)")
     p.add_argument("--sut", help="also ask this SUT (spec as in `run --sut`) about every frame and report the "
                    "share of answers unchanged against the reference frame: the error that matters")
-    p.add_argument("--out", type=Path, default=Path("bench-render"), help="folder for frames and bench.json; "
+    p.add_argument("--out", type=Path, default=Path("runs/bench-render"), help="folder for frames and bench.json; "
                    "reference renders found there are reused")
     p.add_argument("--without-people", action="store_true",
                    help="also time each preset with the driver and child left out: what the people cost")
