@@ -10,16 +10,16 @@ from __future__ import annotations
 import importlib
 import json
 import time
-import traceback
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from .archive import RunDir, TestRecord
 from .archive.run_dir import IMAGES_DIR, LABELS_DIR
-from .protocols import RenderError, SUTResponse
+from .protocols import RenderError
 from .evaluate.occlusion import nothing_to_judge
 from .space import SceneSpace, load_space
+from .sut.runner import query_guarded
 from .config import PipelineConfig   # defined in a light module (the CLI shows its defaults)
 from .errors import InputError
 
@@ -169,12 +169,7 @@ class Pipeline:
     def _ask_and_judge(self, record: TestRecord, image: Path) -> None:
         request = self.parts.build_request(self.space, record.canonical, image, self.config.mode, self.config.prompt)
         start = time.perf_counter()
-        try:
-            response = self.parts.sut.query(request)
-        except ValueError:  # a configuration problem (e.g. a rejected API key) stops the run
-            raise
-        except Exception as exc:  # an adapter bug must not kill the run: record it as a SUT error
-            response = SUTResponse(error=f"{type(exc).__name__}: {exc}", raw=traceback.format_exc(limit=3))
+        response = query_guarded(self.parts.sut, request)  # an adapter bug is this test's SUT error
         record.timings["sut_s"] = time.perf_counter() - start
         record.sut_raw, record.answers, record.caption = response.raw, response.answers, response.caption
         record.sut_error = response.error

@@ -13,8 +13,8 @@ from typing import Iterable, Sequence
 
 import torch
 
-from isu_validate.errors import InputError, InputNotFound
-from isu_validate.image_files import IMAGE_SUFFIXES
+from isu_validate.errors import InputError
+from isu_validate.image_files import expand_images
 
 from .imageio import load_image, unreadable
 from .losses import gram
@@ -23,19 +23,7 @@ from .vgg import VGG19, preprocess
 
 def style_paths(items: Iterable[str | Path]) -> list[Path]:
     """Files and folders of style photos to a sorted list of readable image files (one-line errors)."""
-    paths: list[Path] = []
-    for item in items:
-        item = Path(item)
-        if item.is_dir():
-            found = sorted(p for p in item.iterdir()
-                           if p.suffix.lower() in IMAGE_SUFFIXES and not p.name.startswith("."))
-            if not found:
-                raise InputError(f"style folder {item} holds no images ({', '.join(IMAGE_SUFFIXES)})")
-            paths += found
-        elif item.is_file():
-            paths.append(item)
-        else:
-            raise InputNotFound(f"style image {item} does not exist")
+    paths = expand_images(items, "style ")
     if not paths:
         raise InputError("give at least one style image (a real photo)")
     for path in paths:

@@ -6,16 +6,14 @@ by the VQA judge, so "correct" means here exactly what it meant in the run.
 """
 from __future__ import annotations
 
-import traceback
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from PIL import Image, UnidentifiedImageError
 
 from ..evaluate.vqa import VQAJudge
-from ..protocols import SUTResponse
 from ..space import SceneSpace
-from ..sut import build_request
+from ..sut import build_request, query_guarded
 from .compare import Judged
 
 
@@ -56,12 +54,7 @@ class Asker:
         if problem:
             return Asked(Judged(error=problem), problems=[problem], unreadable=True)
         request = build_request(self.space, scene, image, "vqa")
-        try:
-            response = self.sut.query(request)
-        except ValueError:      # a configuration problem (a rejected key): nothing will work, stop
-            raise
-        except Exception as exc:  # an adapter bug on one image must not end the report
-            response = SUTResponse(error=f"{type(exc).__name__}: {exc}", raw=traceback.format_exc(limit=3))
+        response = query_guarded(self.sut, request)
         if response.error:
             return Asked(Judged(error=f"SUT error: {response.error}"), raw=response.raw or "",
                          problems=[f"SUT error on {short(image)}: {response.error}"])

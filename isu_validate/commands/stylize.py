@@ -24,8 +24,8 @@ from dataclasses import replace
 from pathlib import Path
 
 from isu_validate.atomic import write_text
-from isu_validate.errors import InputError, InputNotFound
-from isu_validate.image_files import IMAGE_SUFFIXES
+from isu_validate.errors import InputError
+from isu_validate.image_files import expand_images
 from isu_validate.pairs import PairsDir
 
 
@@ -173,22 +173,6 @@ def _earlier(report: Path, key: str) -> dict:
     return old if isinstance(old, dict) and old.get("settings_key") == key and "settings" in old else {}
 
 
-def _expand(items: list[str]) -> list[Path]:
-    paths: list[Path] = []
-    for item in items:
-        p = Path(item)
-        if p.is_dir():
-            found = sorted(q for q in p.iterdir() if q.suffix.lower() in IMAGE_SUFFIXES)
-            if not found:
-                raise InputError(f"folder {p} holds no images ({', '.join(IMAGE_SUFFIXES)})")
-            paths += found
-        elif p.is_file():
-            paths.append(p)
-        else:
-            raise InputNotFound(f"image {p} does not exist")
-    return paths
-
-
 def _jobs(args) -> list[tuple[Path, Path]]:
     if args.pairs:
         if args.images:
@@ -199,7 +183,7 @@ def _jobs(args) -> list[tuple[Path, Path]]:
         return [(s.sim, s.nst) for s in samples]
     if not args.images or not args.out:
         raise InputError("stylize needs IMAGES and --out DIR (or --pairs DIR); see isu-validate stylize --help")
-    sources = _expand(args.images)
+    sources = expand_images(args.images)
     stems = [p.stem for p in sources]
     clash = sorted({s for s in stems if stems.count(s) > 1})
     if clash:
@@ -472,7 +456,7 @@ def _train(args) -> int:
     if len(args.images) != 1 or not (args.style and args.content and args.out):
         raise InputError("usage: isu-validate stylize train --style REAL.png --content RENDERS/ --out MODEL")
     cfg = _train_config(args, FastTrainConfig())
-    contents = _expand([str(args.content)])
+    contents = expand_images([str(args.content)])
     report = train_fast(style_paths(args.style), contents, args.out, cfg, resume=not args.no_resume,
                         progress=_train_progress)
     print(json.dumps({"model": str(args.out), "steps": report.steps_done, "final_loss": report.final_loss,

@@ -60,11 +60,13 @@ class VQAJudge:
         details = {"features": features, "counts": counts, "threshold": self.threshold,
                    "ignored": sorted(set(answers) - set(features))}
         scored = {k: f for k, f in features.items() if f["status"] != OCCLUDED}
-        f_qa, details["weighting"] = _weighted_score(scored, weights)
+        f_qa, details["weighting"] = weighted_score(scored, weights)
         return Verdict({"f_qa": f_qa}, f_qa, vqa_failed(f_qa, self.threshold), details)
 
 
-def _weighted_score(features: dict, weights: dict) -> tuple[float, str]:
+def weighted_score(features: dict, weights: dict) -> tuple[float, str]:
+    """F_qa of judged features ({key: {"status": ...}}, occluded ones already left out) and how it was
+    weighted: weights renormalised over their sum, equal weights when every weight is zero."""
     if not features:
         return 1.0, "no questions asked (no active predicted feature): nothing to get wrong"
     total = sum(weights.values())

@@ -8,7 +8,6 @@ with like; the run's stored F_qa stays the "before" value.
 """
 from __future__ import annotations
 
-import traceback
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -16,7 +15,7 @@ from ..archive import TestRecord
 from ..evaluate import make_judge
 from ..evaluate.vqa import OCCLUDED
 from ..protocols import SUTResponse
-from ..sut import build_request
+from ..sut import build_request, query_guarded
 from .stored import StoredRun
 
 
@@ -57,12 +56,7 @@ class Asker:
     def ask(self, record: TestRecord, image: Path) -> tuple[Judged, bool]:
         """The new SUT's answers, judged; and whether every reply came from the cache."""
         request = self._request(record, image)
-        try:
-            response = self.sut.query(request)
-        except ValueError:   # a configuration problem (a rejected key): nothing will work, stop
-            raise
-        except Exception as exc:   # an adapter bug on one test must not end the replay
-            response = SUTResponse(error=f"{type(exc).__name__}: {exc}", raw=traceback.format_exc(limit=3))
+        response = query_guarded(self.sut, request)
         cached = all(response.extra.get("cached") or [False])
         if response.error:
             return Judged(None, raw=response.raw or "", error=response.error), cached

@@ -17,10 +17,11 @@ from .errors import SUTConfigError, TransportError
 # without loading the adapters. public name -> the submodule it lives in
 _NAMES = {"DEFAULT_CAPTION_PROMPT": ".prompt", "build_request": ".prompt", "vqa_prompt": ".prompt",
           "ADAPTERS": ".registry", "open_sut": ".registry", "register_adapter": ".registry",
-          "RepeatingSUT": ".runner", "interpret": ".runner"}
+          "RepeatingSUT": ".runner", "interpret": ".runner",
+          "query_guarded": ".runner"}
 
 __all__ = ["ADAPTERS", "DEFAULT_CAPTION_PROMPT", "RepeatingSUT", "SUTConfigError", "TransportError",
-           "build_request", "interpret", "open_sut", "register_adapter", "vqa_prompt"]
+           "build_request", "interpret", "open_sut", "query_guarded", "register_adapter", "vqa_prompt"]
 
 
 __getattr__, __dir__ = lazy_names(__name__, _NAMES)

@@ -7,6 +7,7 @@ each and averages).  The whole response is a SUT error only when every repeat fa
 from __future__ import annotations
 
 import time
+import traceback
 from typing import Any
 
 from ..protocols import SUTRequest, SUTResponse
@@ -35,6 +36,18 @@ def interpret(request: SUTRequest, exchange: Exchange) -> SUTResponse:
     response.extra.update(outcome=parsed.outcome, status=dict(parsed.status), notes=list(parsed.notes),
                           ignored_keys=list(parsed.ignored_keys))
     return response
+
+
+def query_guarded(sut, request: SUTRequest) -> SUTResponse:
+    """``sut.query(request)``, with an adapter's bug on one request turned into a SUT error response (a
+    run, replay or agreement must not end on it); a ValueError is a configuration problem (a rejected
+    key) that no later request would escape, and is raised."""
+    try:
+        return sut.query(request)
+    except ValueError:
+        raise
+    except Exception as exc:
+        return SUTResponse(error=f"{type(exc).__name__}: {exc}", raw=traceback.format_exc(limit=3))
 
 
 class RepeatingSUT:

@@ -51,15 +51,12 @@ def statuses_after(before: dict[str, list], replayed: dict) -> dict[str, list]:
 
 
 def f_qa_without(statuses: dict[str, list], left_out: set[str]) -> float:
-    """F_qa as the judge computes it (weights renormalised over the scored features; equal weights when
-    every weight is zero), with ``left_out`` not scored, like occluded features."""
+    """F_qa as the judge computes it, with ``left_out`` not scored, like occluded features."""
+    from ...evaluate.vqa import weighted_score
+
     scored = {k: v for k, v in statuses.items() if v[0] != "occluded" and k not in left_out}
-    if not scored:
-        return 1.0
-    total = sum(w for _, w in scored.values())
-    if total > 0:
-        return sum(w for s, w in scored.values() if s == "correct") / total
-    return sum(s == "correct" for s, _ in scored.values()) / len(scored)
+    f_qa, _ = weighted_score({k: {"status": s} for k, (s, _) in scored.items()}, {k: w for k, (_, w) in scored.items()})
+    return f_qa
 
 
 def without(verdicts: dict, replay: dict, left_out: set[str], thresholds, at: float) -> dict:
