@@ -17,7 +17,7 @@ CLI = ("isu_validate.cli", "isu_validate.commands")
 # modules that import nothing of the project: every layer may use them
 LEAVES = ("isu_validate.errors", "isu_validate.atomic", "isu_validate.srgb", "isu_validate.exr",
           "isu_validate.image_files", "isu_validate.tomlfile", "isu_validate.paths", "isu_validate.progress",
-          "isu_validate.config", "isu_validate.lazy")
+          "isu_validate.config", "isu_validate.lazy", "isu_validate.devices")
 # workflows: above the domain packages, below the command line
 WORKFLOWS = ("isu_validate.bench", "isu_validate.search", "isu_validate.pipeline", "isu_validate.execution",
              "isu_validate.analysis", "isu_validate.recreate", "isu_validate.agree", "isu_validate.replay",
