@@ -127,8 +127,13 @@ def test_no_extra_data_gives_the_base_heads_again(tmp_path, base, backbone):
 
 
 def test_the_shipped_features_are_those_the_shipped_heads_were_fitted_on():
-    """Refitting three heads on the shipped training features gives the shipped heads bit for bit and their
-    held-out accuracies (all 14 do; three keep the test quick)."""
+    """Refitting three heads on the shipped training features gives the shipped heads and their held-out
+    answers and accuracies (all 14 do; three keep the test quick).
+
+    Not bit for bit: lbfgs runs through BLAS, whose kernels differ by processor. Measured on these heads
+    (scratch runs with OPENBLAS_CORETYPE pinned): Haswell/Zen/SkylakeX/Sandybridge kernels move a weight by
+    at most 2e-4 of the head's largest weight and a held-out probability by 1e-4; fitting on one training
+    scene fewer (599 of 600) moves them by 3e-2 and 1e-2. The tolerances sit between the two."""
     model = default_model_dir()
     train, held_out = load_bank(model, SPACE, RENDERER_VERSION)
     assert (len(train.scenes), len(held_out.scenes)) == (600, 200)
@@ -139,9 +144,15 @@ def test_the_shipped_features_are_those_the_shipped_heads_were_fitted_on():
     heads = fit_heads(space, train.features, train.scenes, seed=0)
     refit = accuracy(space, heads, held_out.features, held_out.scenes)["per_feature"]
     for head in heads:
+        ship = shipped[head.feature]
+        rows = [i for i, scene in enumerate(held_out.scenes) if head.feature in scene]
+        assert head.classes == ship.classes
+        assert head.predict(held_out.features[rows]) == ship.predict(held_out.features[rows])
         assert refit[head.feature]["accuracy"] == pytest.approx(card[head.feature]["accuracy"])
-        assert np.array_equal(head.weight, shipped[head.feature].weight)
-        assert np.array_equal(head.mean, shipped[head.feature].mean)
+        np.testing.assert_allclose(head.weight, ship.weight, rtol=0, atol=1e-3 * np.abs(ship.weight).max())
+        np.testing.assert_allclose(head.probabilities(held_out.features[rows]),
+                                   ship.probabilities(held_out.features[rows]), rtol=0, atol=1e-3)
+        np.testing.assert_allclose(head.mean, ship.mean, rtol=1e-6)   # a float32 mean: summation order
 
 
 def _only(names):
