@@ -131,9 +131,14 @@ def test_the_shipped_features_are_those_the_shipped_heads_were_fitted_on():
     answers and accuracies (all 14 do; three keep the test quick).
 
     Not bit for bit: lbfgs runs through BLAS, whose kernels differ by processor. Measured on these heads
-    (scratch runs with OPENBLAS_CORETYPE pinned): Haswell/Zen/SkylakeX/Sandybridge kernels move a weight by
-    at most 2e-4 of the head's largest weight and a held-out probability by 1e-4; fitting on one training
-    scene fewer (599 of 600) moves them by 3e-2 and 1e-2. The tolerances sit between the two."""
+    (scratch runs with OPENBLAS_CORETYPE pinned, 1 or 2 threads): Haswell/Zen/SkylakeX/Sandybridge kernels move
+    a weight by at most 2e-4 of the head's largest weight and a held-out probability by 1e-4; real changes
+    move them far more: one training scene fewer (599 of 600) by 3e-2 and 1e-2, features stored as float16
+    by 3e-3 and 4e-3 (luggage_position); solver newton-cg or saga, or C 10% higher, each fail too. The
+    tolerances (1e-3 each) sit between. The held-out answers are the same under every kernel (none is within
+    0.02 of a tie). The means are plain float32 sums (no BLAS), compared in the units the heads see (the
+    feature's std): the same scenes summed in another order move them by 5e-6, float16 features by 3e-4,
+    one scene fewer by 3e-2."""
     model = default_model_dir()
     train, held_out = load_bank(model, SPACE, RENDERER_VERSION)
     assert (len(train.scenes), len(held_out.scenes)) == (600, 200)
@@ -152,7 +157,7 @@ def test_the_shipped_features_are_those_the_shipped_heads_were_fitted_on():
         np.testing.assert_allclose(head.weight, ship.weight, rtol=0, atol=1e-3 * np.abs(ship.weight).max())
         np.testing.assert_allclose(head.probabilities(held_out.features[rows]),
                                    ship.probabilities(held_out.features[rows]), rtol=0, atol=1e-3)
-        np.testing.assert_allclose(head.mean, ship.mean, rtol=1e-6)   # a float32 mean: summation order
+        np.testing.assert_array_less(np.abs(head.mean - ship.mean), 1e-4 * ship.scale)
 
 
 def _only(names):
