@@ -327,7 +327,8 @@ def test_the_command_calls_the_public_function(stored_run, tmp_path, monkeypatch
                  "--repeats", "2"]) == 0
     (run, out, settings), _ = calls[0]
     assert isinstance(settings, iv.ReplaySettings) and (settings.sut, settings.repeats) == ("replay-double:truth", 2)
-    result = iv.replay_run(stored_run, tmp_path / "r", iv.ReplaySettings(sut="replay-double:truth", threshold=0.8))
+    result = iv.replay_run(stored_run, tmp_path / "r", iv.ReplaySettings(sut="replay-double:truth", threshold=0.8),
+                           overwrite=True)   # other settings than the command's replay in the same folder
     assert (result.new, result.persisting) == (0, 0) and result.fixed == result.summary["failures_before"]
     assert set(result.rates) == {1.0, 0.9, 0.8, 0.7, 0.6, 0.5} and result.rates[0.8][1] == 0.0
     assert 0 < result.p <= 1 and result.exit_code == 0

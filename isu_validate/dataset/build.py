@@ -17,6 +17,7 @@ from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Callable
 
+from ..archive.output_dir import claim_output, is_empty
 from ..execution import make_executor, render_threads
 from ..progress import Progress
 from ..space import SceneSpace, load_space
@@ -64,6 +65,7 @@ def build_dataset(settings: DatasetSettings, out: str | Path, resume: bool = Fal
     _check_rendering(settings)
     styles = plan_styles(settings.styles, settings.style_models, settings.style_size, settings.style_steps)
     settings = replace(settings, inputs=_inputs(runs, styles))
+    output = claim_output(folder.path, "dataset", settings.identity(), resume=resume, overwrite=None)
     info = _resume_info(folder, settings) if resume else _new_info(folder, settings, space, styles)
     plan = Plan(space, settings, runs)
     info["focus"] = _focus_info(settings, plan)
@@ -75,8 +77,9 @@ def build_dataset(settings: DatasetSettings, out: str | Path, resume: bool = Fal
     if _usable(entries) < settings.n and len(entries) < plan.limit:   # else: a complete dataset, written again
         executor = make_executor(config, settings.workers, settings.cluster, task=IMAGES)   # checks the renderer
         try:
+            output.mark()
             if not resume:
-                folder.write_info(info)   # the first file: from here on the folder is this dataset
+                folder.write_info(info)   # from here on the folder is this dataset
             made_now = _render_slots(folder, plan, settings.n, entries, executor, log, progress_stream)
         finally:
             executor.close()
@@ -106,8 +109,9 @@ def _new_info(folder: DatasetDir, settings: DatasetSettings, space: SceneSpace, 
     from ..render import get_preset, load_cabin
 
     if folder.is_dataset():
-        raise DatasetError(f"{folder.path} already holds a dataset; continue it with --resume, or choose another --out")
-    if folder.path.exists() and (not folder.path.is_dir() or any(folder.path.iterdir())):
+        raise DatasetError.naming(f"{folder.path} already holds a dataset; continue it with {{resume}}, or choose "
+                                  "another folder for {out}")
+    if not is_empty(folder.path):
         raise DatasetError(f"{folder.path} exists and is not an empty folder; choose a new folder for --out")
     preset = get_preset(settings.preset) if isinstance(settings.preset, str) else settings.preset
     environment = load_cabin(settings.cabin).get("lighting", {}).get("environment", "?")
