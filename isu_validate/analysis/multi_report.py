@@ -5,11 +5,12 @@ from __future__ import annotations
 import sys
 import time
 from collections import defaultdict
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
 from ..archive import find_runs
+from ..archive.output_dir import claim_output
 from ..atomic import write_text
 from . import plots
 from .embeddings import Embedder, make_embedder
@@ -36,7 +37,7 @@ class ReportSettings:
 
 
 def build_report(run_paths: list, out_dir: Path, settings: ReportSettings | None = None,
-                 log=lambda msg: print(msg, file=sys.stderr)) -> Path:
+                 log=lambda msg: print(msg, file=sys.stderr), overwrite: bool = False) -> Path:
     settings = settings or ReportSettings()
     embedder = make_embedder(settings.embedding)  # fail on a bad embedding before reading runs
     runs = name_uniquely([load_run(p) for p in find_runs(run_paths)])
@@ -44,7 +45,8 @@ def build_report(run_paths: list, out_dir: Path, settings: ReportSettings | None
         raise InputError("no runs given; pass one or more run directories")
     log(f"report: {len(runs)} runs, {sum(len(r.records) for r in runs)} tests")
     out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
+    claim_output(out_dir, "report", {"runs": sorted(str(r.path.resolve()) for r in runs), **asdict(settings)},
+                 overwrite=overwrite).mark()
     settings_groups = settings_of(runs)
     parts = [overview(runs), rq1_part(runs), timeline_part(runs)]
     for (sut, mode), members in settings_groups.items():

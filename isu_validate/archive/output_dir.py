@@ -26,8 +26,8 @@ from typing import Any
 from ..atomic import write_json
 from ..errors import UserError
 
-__all__ = ["MARKER", "Difference", "Output", "OutputInUse", "claim_output", "differences_between", "holder",
-           "is_empty"]
+__all__ = ["MARKER", "Difference", "Output", "OutputInUse", "claim_output", "claim_output_file",
+           "differences_between", "holder", "is_empty"]
 
 MARKER = ".isu-validate.json"
 # files that name the command whose output a folder holds, for folders from before the marker (first match
@@ -44,6 +44,7 @@ SIGNATURES: tuple[tuple[str, str, tuple[str, str] | None], ...] = (
     ("check.json", "exposure check", None),
     ("stylize.json", "stylize", None),
     ("stages.json", "bench augment", None),
+    ("session.json", "capture shoot", None),
 )
 
 
@@ -105,7 +106,7 @@ def claim_output(path: str | os.PathLike, command: str, settings: dict, *, resum
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise OutputInUse.naming(f"{path} is a file; {command} writes a folder: name a folder for {{out}}", argument)
-    found = None if overwrite else holder(path)
+    found = None if overwrite or is_empty(path) else holder(path)
     if found and found.command != command:
         raise OutputInUse.naming(
             f"{path} holds the output of `isu-validate {found.command}` ({found.evidence}); `isu-validate {command}` "
@@ -119,6 +120,25 @@ def claim_output(path: str | os.PathLike, command: str, settings: dict, *, resum
                 f"{path} holds `isu-validate {command}` output made with other settings ({listed}); choose "
                 f"another folder for {{out}} to keep both{_or_overwrite(overwrite, 'replace it')}", argument)
     return Output(path, command, settings)
+
+
+def claim_output_file(path: str | os.PathLike, command: str, *, overwrite: bool = False,
+                      argument: str = "out") -> Path:
+    """``path`` as a file ``command`` writes (``realism --out``): refused, unless ``overwrite``, when it is
+    already there (a file the user made earlier) or when its folder holds another command's output. Writes
+    nothing."""
+    path = Path(path)
+    if path.is_dir():
+        raise OutputInUse.naming(f"{path} is a folder; {command} writes a file: name a file for {{out}}", argument)
+    found = None if overwrite else holder(path.parent)
+    if found:
+        raise OutputInUse.naming(
+            f"{path} is inside the output of `isu-validate {found.command}` ({path.parent / found.evidence}); "
+            f"choose a file elsewhere for {{out}}, or pass {{overwrite}} to write it there", argument)
+    if path.exists() and not overwrite:
+        raise OutputInUse.naming(f"{path} already exists; choose another file for {{out}}, or pass {{overwrite}} "
+                                 "to replace it", argument)
+    return path
 
 
 def is_empty(path: str | os.PathLike) -> bool:

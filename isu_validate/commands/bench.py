@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import importlib
 
-from . import chosen
+from . import add_overwrite_option, chosen
 
 # bench NAME -> its one-line summary (the module is isu_validate.bench.NAME)
 BENCHES = {
@@ -34,6 +34,29 @@ def register(sub, argv: list[str] | None = None) -> None:
     for name, summary in BENCHES.items():
         if after is None or name == wanted:
             importlib.import_module(f"isu_validate.bench.{name}").register_bench(bench_sub)
+            _claims_its_out(bench_sub.choices[name], name)
         else:
             bench_sub.add_parser(name, help=summary, add_help=False)
     parser.set_defaults(func=lambda args: parser.print_help() or 2)
+
+
+# options that change how a benchmark runs, not what its folder holds
+_VOLATILE = {"func", "out", "overwrite", "command", "bench", "workers", "threads", "cluster", "json", "interrupted"}
+
+
+def _claims_its_out(parser, name: str) -> None:
+    """A benchmark with ``--out`` writes its folder only when it is new or this benchmark's own with the same
+    options (``archive/output_dir.py``), as every command does; ``--overwrite`` says otherwise."""
+    run = parser.get_default("func")
+    if run is None or "out" not in {a.dest for a in parser._actions}:
+        return
+    add_overwrite_option(parser, "another benchmark's or command's output, or this one's with other options")
+
+    def claimed(args):
+        if args.out is not None:
+            from ..archive.output_dir import claim_output
+            settings = {k: v for k, v in vars(args).items() if k not in _VOLATILE}
+            claim_output(args.out, f"bench {name}", settings, overwrite=args.overwrite).mark()
+        return run(args)
+
+    parser.set_defaults(func=claimed)

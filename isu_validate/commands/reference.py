@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 
 from ..errors import InputError
+from . import add_overwrite_option
 
 
 def register(sub) -> None:
@@ -34,6 +35,7 @@ def register(sub) -> None:
     train.add_argument("--out", type=Path,
                        help="model folder (default WORKDIR/model, with --extra WORKDIR/model-extra; the shipped "
                             "model is replaced only when named here: --out data/reference-isu)")
+    add_overwrite_option(train, "another model or another command's output")
     train.add_argument("--workdir", type=Path, default=Path("runs/reference-training"),
                        help="where the rendered sets (with --extra: the datasets' features) go; an interrupted "
                             "training resumes from here")
@@ -67,6 +69,7 @@ def cmd_train_new(args) -> int:
     space = load_space(args.space)
     out = args.out or args.workdir / "model"  # never the shipped model unless asked for by name
     checks = dict(parse_check(spec, args.held_out) for spec in args.check_preset)
+    output = _claim(args, out, {"space": space.hash, **{k: getattr(args, k) for k in FROM_SCRATCH}})
 
     def renderer_for(preset: str):
         return open_renderer(preset=preset, camera=args.camera, cabin=args.cabin, space=space,
@@ -78,6 +81,7 @@ def cmd_train_new(args) -> int:
                                other_presets=checks, renderer_for=renderer_for, renderer_version=RENDERER_VERSION)
     finally:
         renderer.close()
+    output.mark()   # the model is written last, so a refused or failed training leaves no folder behind
     print(json.dumps(card["held_out"]["per_feature"], indent=2))
     _print_written(out, default_model_dir())
     return 0
@@ -98,15 +102,25 @@ def cmd_retrain(args) -> int:
                          f"{', '.join(given)} do not apply (train a new base without --extra)")
     space = load_space(args.space)
     out = args.out or args.workdir / "model-extra"
+    base = args.base or default_model_dir()
+    output = _claim(args, out, {"space": space.hash, "base": str(Path(base).resolve()),
+                                "extra": [str(Path(f).resolve()) for f in args.extra]})
     extra = []
     for folder in args.extra:
         dataset = open_dataset(folder)
         extra.append(extra_set(folder, dataset.info(), dataset.metadata(), space))
-    card = retrain_with_extra(space, args.base or default_model_dir(), extra, out, RENDERER_VERSION,
+    card = retrain_with_extra(space, base, extra, out, RENDERER_VERSION,
                               cache_dir=args.workdir / "extra-features")
+    output.mark()
     print((out / "MODEL_CARD.md").read_text())
     _print_written(out, default_model_dir())
     return 0 if card else 1
+
+
+def _claim(args, out: Path, settings: dict):
+    """The model folder: new, or this same training's; another model or command's output needs --overwrite."""
+    from ..archive.output_dir import claim_output
+    return claim_output(out, "reference train", settings, overwrite=args.overwrite)
 
 
 def _print_written(out: Path, shipped: Path) -> None:

@@ -68,7 +68,7 @@ def build_dataset(settings: DatasetSettings, out: str | Path, resume: bool = Fal
     output = claim_output(folder.path, "dataset", settings.identity(), resume=resume, overwrite=None)
     info = _resume_info(folder, settings) if resume else _new_info(folder, settings, space, styles)
     plan = Plan(space, settings, runs)
-    info["focus"] = _focus_info(settings, plan)
+    info["focus"] = _focus_info(settings, plan, runs)
     config = ImageConfig(str(folder.path), settings.space, settings.preset, settings.camera, settings.extrinsics_from,
                          settings.cabin, render_threads(settings.workers), tuple(styles), settings.seed,
                          settings.renderer_factory)
@@ -135,10 +135,15 @@ def _resume_info(folder: DatasetDir, settings: DatasetSettings) -> dict:
     return info
 
 
-def _focus_info(settings: DatasetSettings, plan: Plan) -> dict | None:
+def _focus_info(settings: DatasetSettings, plan: Plan, runs) -> dict | None:
+    """The focus, with what defined a failing test: each run's SUT (and options) and oracle threshold."""
     if settings.focus is None:
         return None
-    return {"mode": settings.focus, "runs": list(settings.from_runs), "regions": [r.to_dict() for r in plan.regions]}
+    judged_by = [{"run": str(r.path.resolve()), "sut": r.sut, "sut_options": r.pipeline.get("sut_options") or {},
+                  "threshold": r.oracle_threshold, "tests": len(r.valid),
+                  "failing": sum(bool(t.failed) for t in r.valid)} for r in runs]
+    return {"mode": settings.focus, "runs": list(settings.from_runs), "judged_by": judged_by,
+            "regions": [r.to_dict() for r in plan.regions]}
 
 
 def _usable(entries: dict[int, dict]) -> int:
@@ -183,6 +188,7 @@ def _finish(folder: DatasetDir, space: SceneSpace, settings: DatasetSettings, in
                 counts={"images": len(ok) + copies, "renders": len(ok), "style_copies": copies,
                         "skipped": len(skipped), "short": short, **counts(space, ok)},
                 skipped=skipped, costs=costs(ok, seconds, made_now) if made_now else info.get("costs"),
+                image_size=sorted({f"{e['width']}x{e['height']}" for e in ok}),
                 reproduce=reproduce(settings, str(folder.path)))
     _sweep(folder, ok)
     write_outputs(folder, space, ok, info, settings.prompt_style)

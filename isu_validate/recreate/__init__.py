@@ -62,8 +62,9 @@ def plan_recreation(runs: list[str | os.PathLike], mode: str, n: int, seed: int,
     """
     _check_preset(sheet_preset)
     pairs = PairsDir(out)
+    # another command's output is named; any other content (an earlier recreate, captured frames) is "not empty"
     output = claim_output(pairs.root, "recreate", {"runs": [str(Path(r).resolve()) for r in runs], "mode": mode,
-                                                   "n": n, "seed": seed}, overwrite=None)
+                                                   "n": n, "seed": seed}, resume=True, overwrite=None)
     if not is_empty(pairs.root):
         raise PairsError.naming(f"{pairs.root} is not empty; recreate writes a new pairs directory (choose another "
                                 "folder for {out}, so no captured frame is ever overwritten)")
