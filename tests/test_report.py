@@ -169,6 +169,30 @@ def test_report_command_writes_html_and_every_table(runs_root, tmp_path, capsys)
     assert html.count("<script>") == 1 and "data:image/png;base64," in html
 
 
+def test_the_report_states_thresholds_reads_as_prose_and_prints_its_failure_regions(runs_root, tmp_path, capsys):
+    one = sorted(runs_root.iterdir())[0]
+    out = tmp_path / "report"
+    assert main(["report", str(one), "--out", str(out), "--embedding", "scene"]) == 0
+    printed = capsys.readouterr()
+    assert "report: 1 run, " in printed.err and "1 runs" not in printed.err
+    rules = json.loads((out / "report.json").read_text())["tables"]["regions"]
+    assert rules and "failure regions (decision-tree rules where most tests fail):" in printed.out
+    for r in rules:   # the terminal says what the report's regions table says
+        assert f"  {r['rule']}: {r['failing']} of {r['tests']} tests failing" in printed.out
+    html = html_of(out / "report.html")
+    runs = list(csv.DictReader(open(out / "runs.csv")))
+    assert runs[0]["oracle_threshold"] == str(load_run(one).oracle_threshold)
+    assert "<th>oracle_threshold</th>" in html and "1 run ·" in html
+    assert "{'vqa'" not in html and "vqa: f_qa" in html   # settings read as prose, not Python dicts
+
+
+def test_entropy_of_an_even_spread_is_exactly_one():
+    from isu_validate.analysis.diversity import normalised_entropy
+    for k in (5, 7, 12):   # float error: 1.0000000000000002 for 5 and 12, 0.9999999999999999 for 7 before rounding
+        assert normalised_entropy(list(range(k)) * 3, k) == 1.0
+    assert normalised_entropy([0, 0], 3) == 0.0
+
+
 def test_report_errors_name_the_problem(tmp_path, capsys):
     (tmp_path / "empty").mkdir()
     assert main(["report", str(tmp_path / "empty"), "--out", str(tmp_path / "o")]) == 2

@@ -32,4 +32,24 @@ def cmd_report(args) -> int:
     path = report(args.runs, args.out, embedding=args.embedding, clusters=args.clusters, gallery=args.gallery,
                   seed=args.seed, overwrite=args.overwrite)
     print(f"report: {path}")
+    for line in region_lines(path.parent / "report.json"):
+        print(line)
     return 0
+
+
+def region_lines(report_json: Path) -> list[str]:
+    """The failure regions of every SUT and mode, as the report's "Failure regions" tables hold them (the
+    rules `dataset --focus failing` draws near)."""
+    import json
+
+    tables = json.loads(report_json.read_text())["tables"]
+    lines = []
+    for name, rules in sorted(tables.items()):
+        if not name.startswith("regions"):
+            continue
+        group = name[len("regions_"):].replace("_", " ") if name != "regions" else ""
+        lines.append(f"failure regions{' of ' + group if group else ''} (decision-tree rules where most tests fail):"
+                     + ("" if rules else " none"))
+        lines += [f"  {r['rule']}: {r['failing']} of {r['tests']} tests failing, "
+                  f"{100 * r['share_of_failures']:.1f}% of the failures" for r in rules]
+    return lines
