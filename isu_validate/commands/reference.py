@@ -17,14 +17,17 @@ def register(sub) -> None:
     train.add_argument("--n", type=int, help=f"training scenes (default {DEFAULTS['n']})")
     train.add_argument("--held-out", type=int,
                        help=f"held-out scenes for the model card (default {DEFAULTS['held_out']})")
-    train.add_argument("--seed", type=int)
-    train.add_argument("--space", default="isu-paper")
+    train.add_argument("--seed", type=int,
+                       help=f"seed of the training and held-out scenes (default {DEFAULTS['seed']})")
+    train.add_argument("--space", default="isu-paper",
+                       help="scene space name or .toml path whose features the heads answer (default isu-paper)")
     train.add_argument("--preset", help="render preset (default draft, as the demo renders)")
     train.add_argument("--check-preset", action="append", default=[], metavar="PRESET[:N]",
                        help="also render the first N held-out scenes (default all) at PRESET and report the "
                             "accuracy on them, e.g. standard:100 (repeatable)")
-    train.add_argument("--camera")
-    train.add_argument("--cabin")
+    train.add_argument("--camera", help=f"camera rig name or .toml path the scenes are rendered through "
+                                        f"(default {DEFAULTS['camera']})")
+    train.add_argument("--cabin", help=f"cabin rig name or .toml path (default {DEFAULTS['cabin']})")
     train.add_argument("--extra", nargs="+", type=Path, metavar="DATASET",
                        help="retrain on the --base model's own training scenes (its stored features: nothing is "
                             "rendered again) plus these datasets (`isu-validate dataset`); the card compares every "
@@ -38,12 +41,12 @@ def register(sub) -> None:
     add_overwrite_option(train, "another model or another command's output")
     train.add_argument("--workdir", type=Path, default=Path("runs/reference-training"),
                        help="where the rendered sets (with --extra: the datasets' features) go; an interrupted "
-                            "training resumes from here")
+                            "training resumes from here (default runs/reference-training)")
     train.set_defaults(func=cmd_train)
     parser.set_defaults(func=lambda args: parser.print_help() or 2)
 
 
-DEFAULTS = {"n": 800, "held_out": 200, "seed": 0, "preset": "draft", "camera": "default", "cabin": "default"}
+DEFAULTS = {"n": 600, "held_out": 200, "seed": 0, "preset": "draft", "camera": "default", "cabin": "default"}
 FROM_SCRATCH = ("n", "held_out", "seed", "preset", "check_preset", "camera", "cabin")
 
 
@@ -102,7 +105,7 @@ def cmd_retrain(args) -> int:
                          f"{', '.join(given)} do not apply (train a new base without --extra)")
     space = load_space(args.space)
     out = args.out or args.workdir / "model-extra"
-    base = args.base or default_model_dir()
+    base = _check_base(args.base) if args.base else default_model_dir()
     output = _claim(args, out, {"space": space.hash, "base": str(Path(base).resolve()),
                                 "extra": [str(Path(f).resolve()) for f in args.extra]})
     extra = []
@@ -115,6 +118,24 @@ def cmd_retrain(args) -> int:
     print((out / "MODEL_CARD.md").read_text())
     _print_written(out, default_model_dir())
     return 0 if card else 1
+
+
+def _check_base(base: Path) -> Path:
+    """``--base`` as a model folder, or an error that says what the path really is."""
+    from ..archive.output_dir import holder
+    from ..reference.model import default_model_dir
+
+    fix = f"name a model folder (one with heads.npz, e.g. {default_model_dir()} or a `reference train --out`)"
+    if not base.exists():
+        raise InputError(f"--base {base} does not exist; {fix}")
+    if not base.is_dir():
+        raise InputError(f"--base {base} is a file; {fix}")
+    if not (base / "heads.npz").is_file():
+        found = holder(base)
+        what = (f"holds the output of `isu-validate {found.command}` ({found.evidence})" if found
+                else "holds no heads.npz")
+        raise InputError(f"--base {base} {what}, not a reference ISU model; {fix}")
+    return base
 
 
 def _claim(args, out: Path, settings: dict):
