@@ -21,7 +21,7 @@ class UserError(Exception):
         """An error whose fix names options in the caller's words: ``{resume}``, ``{overwrite}`` and ``{out}``
         read ``resume=True``, ``overwrite=True`` and ``the ARGUMENT argument`` in Python (``str``), ``--resume``,
         ``--overwrite`` and ``--out`` on the command line (``on_command_line``)."""
-        error = cls(_worded(template, {**PYTHON_WORDS, "{out}": f"the {argument} argument"}))
+        error = cls(in_python_words(template, argument))
         error.template = template
         return error
 
@@ -37,6 +37,11 @@ class InputError(UserError, ValueError):
 
 class InputNotFound(UserError, FileNotFoundError):
     """A file or folder the user named, or one the installation should hold, is not there."""
+
+
+def in_python_words(template: str, argument: str = "out") -> str:
+    """``template`` as ``str`` of a ``naming`` error reads it (for errors with a constructor of their own)."""
+    return _worded(template, {**PYTHON_WORDS, "{out}": f"the {argument} argument"})
 
 
 def _worded(template: str, words: dict[str, str]) -> str:

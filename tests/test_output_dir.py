@@ -204,3 +204,23 @@ def test_render_random_refuses_a_run(run, capsys):
 def test_capture_shoot_refuses_a_run(run, capsys):
     refused(["capture", "shoot", "--source", "replay:" + str(run / "images"), "--frames", "1", "--out", str(run)],
             run, capsys, "holds the output of `isu-validate run`")
+
+
+def test_resume_errors_name_resume_true_in_python_and_resume_on_the_command_line(tmp_path):
+    from isu_validate.archive.run_file import RunError
+    from isu_validate.config import PipelineConfig, RunConfig
+    from isu_validate.dataset.folder import DatasetError
+
+    with pytest.raises(DatasetError) as no_dataset:
+        iv.build_dataset(iv.DatasetSettings(n=2, renderer_factory=DATASET_FACTORY), tmp_path / "none", resume=True)
+    assert "start one without resume=True" in str(no_dataset.value)
+    assert "start one without --resume" in no_dataset.value.on_command_line()
+    run = tmp_path / "run"
+    config = RunConfig(PipelineConfig(run_dir=str(run), factory="tests.doubles:build"), algorithm="rs", pop_size=2,
+                       budget_tests=2)
+    iv.run_search(config)
+    with pytest.raises(RunError) as other:
+        iv.run_search(RunConfig(PipelineConfig(run_dir=str(run), factory="tests.doubles:build"), algorithm="rs",
+                                pop_size=2, budget_tests=2, seed=9), resume=True)
+    assert "another folder for the run_dir argument" in str(other.value) and "--out" not in str(other.value)
+    assert "another folder for --out" in other.value.on_command_line()

@@ -12,7 +12,7 @@ import os
 from pathlib import Path
 
 from ..atomic import write_json
-from ..errors import UserError
+from ..errors import UserError, in_python_words
 from .output_dir import Difference, Output, claim_output, differences_between  # noqa: F401 (resume checks name them here)
 from .run_dir import ARCHIVE_FILE, RUN_FILE, RunDir, RunDirError  # noqa: F401 (the run's writers name them here)
 
@@ -30,8 +30,9 @@ class ResumeMismatch(RunError):
     def __init__(self, run_dir: Path, differences: list[Difference]):
         self.run_dir, self.differences = run_dir, differences
         listed = "; ".join(str(d) for d in differences)
-        super().__init__(f"{run_dir} holds a run with a different configuration ({listed}); resume it without "
-                         f"these options (the stored ones are used) or start a new run with another --out")
+        self.template = (f"{run_dir} holds a run with a different configuration ({listed}); resume it with the "
+                         "stored settings or start a new run in another folder for {out}")
+        super().__init__(in_python_words(self.template, argument="run_dir"))
 
 
 def read_run_file(run_dir: str | os.PathLike) -> dict:

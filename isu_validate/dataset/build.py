@@ -125,12 +125,13 @@ def _new_info(folder: DatasetDir, settings: DatasetSettings, space: SceneSpace, 
 
 def _resume_info(folder: DatasetDir, settings: DatasetSettings) -> dict:
     if not folder.is_dataset():
-        raise DatasetError(f"no dataset to resume in {folder.path} (no dataset.json); start one without --resume")
+        raise DatasetError.naming(f"no dataset to resume in {folder.path} (no dataset.json); start one without "
+                                  "{resume}")
     info = folder.info()
     diffs = differences(info.get("identity", {}), settings.identity())
     if diffs:
-        raise DatasetError(f"{folder.path} was started with other settings; resume with the same ones (or choose "
-                           f"another --out): " + "; ".join(diffs))
+        raise DatasetError.naming(f"{folder.path} was started with other settings; resume with the same ones (or "
+                                  "choose another folder for {out}): " + "; ".join(diffs))
     info["settings"] = settings.to_dict()   # workers and cluster may change
     return info
 
