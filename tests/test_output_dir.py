@@ -141,6 +141,20 @@ def test_exposure_check_refuses_a_run(run, tmp_path, capsys):
             "holds the output of `isu-validate run`", "`isu-validate exposure check` would change it")
 
 
+def test_exposure_apply_refuses_a_run_as_its_folder(run, tmp_path, capsys):
+    import numpy as np
+
+    from capture.camera import load_camera, write_imaging
+    from capture.camera_model import synthetic
+    from tests.test_exposure_cli import _exr
+
+    cam = write_imaging(load_camera("default").source, synthetic.camera(), tmp_path / "cam.toml")
+    renders = tmp_path / "renders"
+    _exr(renders / "images" / "t0000.exr", synthetic.scene(np.random.default_rng(0), (60, 80)) * 0.5)
+    refused(["exposure", "apply", str(renders), "--camera", str(cam), "--out", str(run)], run, capsys,
+            "holds the output of `isu-validate run`", "`isu-validate exposure apply` would change it")
+
+
 def test_bench_refuses_a_run(run, capsys):
     refused(["bench", "render", "--out", str(run)], run, capsys,
             "holds the output of `isu-validate run`", "`isu-validate bench render` would change it")
