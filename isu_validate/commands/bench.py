@@ -40,23 +40,20 @@ def register(sub, argv: list[str] | None = None) -> None:
     parser.set_defaults(func=lambda args: parser.print_help() or 2)
 
 
-# options that change how a benchmark runs, not what its folder holds
-_VOLATILE = {"func", "out", "overwrite", "command", "bench", "workers", "threads", "cluster", "json", "interrupted"}
-
-
 def _claims_its_out(parser, name: str) -> None:
-    """A benchmark with ``--out`` writes its folder only when it is new or this benchmark's own with the same
-    options (``archive/output_dir.py``), as every command does; ``--overwrite`` says otherwise."""
+    """A benchmark with ``--out`` refuses a folder that holds another command's output (``archive/output_dir.py``),
+    as every command does; ``--overwrite`` says otherwise. Its own earlier output is the benchmark's business:
+    ``bench augment`` and ``bench effectiveness --pipeline`` resume it and refuse other settings themselves, the
+    others measure again into it."""
     run = parser.get_default("func")
     if run is None or "out" not in {a.dest for a in parser._actions}:
         return
-    add_overwrite_option(parser, "another benchmark's or command's output, or this one's with other options")
+    add_overwrite_option(parser, "another command's output")
 
     def claimed(args):
         if args.out is not None:
             from ..archive.output_dir import claim_output
-            settings = {k: v for k, v in vars(args).items() if k not in _VOLATILE}
-            claim_output(args.out, f"bench {name}", settings, overwrite=args.overwrite).mark()
+            claim_output(args.out, f"bench {name}", {}, resume=True, overwrite=args.overwrite).mark()
         return run(args)
 
     parser.set_defaults(func=claimed)
