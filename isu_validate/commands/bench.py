@@ -51,9 +51,14 @@ def _claims_its_out(parser, name: str) -> None:
     add_overwrite_option(parser, "another command's output")
 
     def claimed(args):
-        if args.out is not None:
-            from ..archive.output_dir import claim_output
-            claim_output(args.out, f"bench {name}", {}, resume=True, overwrite=args.overwrite).mark()
-        return run(args)
+        if args.out is None:
+            return run(args)
+        from ..archive.output_dir import claim_output
+        output = claim_output(args.out, f"bench {name}", {}, resume=True, overwrite=args.overwrite)
+        try:
+            return run(args)
+        finally:   # marked once the benchmark made it: a refused option leaves no folder behind
+            if output.path.is_dir():
+                output.mark()
 
     parser.set_defaults(func=claimed)
