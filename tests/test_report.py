@@ -102,6 +102,19 @@ def test_the_run_command_writes_the_single_run_report(tmp_path, monkeypatch):
         assert f"<h2>{heading}</h2>" in html
 
 
+def test_the_single_run_report_shows_rates_with_one_decimal_as_the_report_over_runs(runs_root):
+    from isu_validate.analysis import write_run_report
+    from isu_validate.analysis.rq1 import run_rates
+
+    run = sorted(runs_root.iterdir())[0]
+    row = run_rates(load_run(run))
+    html = html_of(write_run_report(run))
+    rates = [row[rate_key(t)] for t in load_run(run).thresholds]
+    assert any(round(r, 1) != round(r, 3) for r in rates)   # a rate such as 16.667 is on the page
+    for r in rates:
+        assert f"<td>{r:.1f}</td>" in html and f"<td>{r:.3f}</td>" not in html.replace(f"<td>{r:.1f}</td>", "")
+
+
 def test_failure_analysis_finds_the_doubles_known_faults(runs_root):
     runs = [load_run(p) for p in sorted(runs_root.iterdir())]
     rows, pairs = feature_errors(runs)
