@@ -99,7 +99,7 @@ def main(argv: list[str] | None = None) -> int:
                                            "(resume with --resume)"), file=sys.stderr)
         return 130
     except UserError as exc:
-        print(f"isu-validate {args.command}: error: {exc}", file=sys.stderr)
+        print(f"isu-validate {args.command}: error: {exc.on_command_line()}", file=sys.stderr)
         return 2
     except Exception:
         traceback.print_exc()

@@ -3,7 +3,8 @@ tests.dataset_doubles:renderer``): it paints the scene's hash and writes a seg c
 the driver's face and, when there is one, the suitcase are rectangles of their instance ids.
 
 ISU_TEST_RENDER_DELAY (seconds) slows every frame, so a test can kill a build mid-way;
-ISU_TEST_UNUSABLE_WITH_CAN makes every scene with a can on the co-driver seat an unusable frame."""
+ISU_TEST_UNUSABLE_WITH_CAN makes every scene with a can on the co-driver seat an unusable frame;
+ISU_TEST_HIDE_PHONE hides the phone in the driver's hand (visible share 0.02: occluded) wherever there is one."""
 from __future__ import annotations
 
 import hashlib
@@ -45,6 +46,9 @@ class SegPaintRenderer:
         visibility = {k: (0.05 if hidden else 1.0) for k in ("luggage", "luggage_position", "luggage_colour")
                       if k in canonical and canonical.get("luggage") == "YES"}
         occluded = sorted(visibility) if hidden else []
+        if os.environ.get("ISU_TEST_HIDE_PHONE") and canonical.get("phone_position", "NONE") != "NONE":
+            visibility["phone_position"] = 0.02
+            occluded = sorted([*occluded, "phone_position"])
         return RenderResult(image=out, channels={"seg": seg}, timings={"render_s": 0.0},
                             visibility=visibility, occluded=occluded)
 

@@ -294,7 +294,7 @@ def test_sut_options_reach_the_sut_and_a_malformed_one_is_one_line(tmp_path, mon
     import isu_validate.agree as agree_pkg
     seen = {}
 
-    def measure(pairs, out, settings):
+    def measure(pairs, out, settings, overwrite=False):
         seen["options"] = settings.sut_options
         raise SystemExit(0)
     monkeypatch.setattr(agree_pkg, "measure_agreement", measure)

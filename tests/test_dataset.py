@@ -27,7 +27,7 @@ from isu_validate.image_files import IMAGE_SUFFIXES
 from isu_validate.render import Preset
 from isu_validate.search import run_search
 from isu_validate.space import load_space
-from isu_validate.sut import build_request, interpret
+from isu_validate.sut import build_request, interpret, vqa_prompt
 from isu_validate.sut.exchange import Exchange
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -167,7 +167,8 @@ def test_each_vqa_chat_is_the_sut_prompt_then_an_answer_the_real_judge_scores_on
         assert (user["role"], assistant["role"]) == ("user", "assistant") and chat["images"] == [chat["file_name"]]
         row = metadata[chat["file_name"]]
         request = build_request(SPACE, row["scene"], rendered / chat["file_name"], "vqa")
-        assert user["content"] == [{"type": "text", "text": request.prompt}, {"type": "image"}]
+        visible = [q for q in request.questions if q.key not in row["occluded"]]   # occluded: not asked, not taught
+        assert user["content"] == [{"type": "text", "text": vqa_prompt(SPACE, visible)}, {"type": "image"}]
         answer = assistant["content"][0]["text"]
         response = interpret(request, Exchange(raw=answer, content=answer))
         verdict = judge.judge(row["scene"], request, response, occluded=row["occluded"])
@@ -238,6 +239,30 @@ def test_a_focused_dataset_records_its_regions_and_replaces_unusable_frames(fail
     assert len(rows) == 12 and all(r["scene"].get("colacan_codriver_seat") != "YES" for r in rows)
     assert not {r["scene_key"] for r in rows} & {t.scene_key for t in load_run(failing_run).records}
     assert "| region |" in (tmp_path / "ds" / "DATASET_CARD.md").read_text()
+
+
+def test_a_training_row_never_teaches_an_answer_for_a_feature_the_frame_hides(tmp_path, monkeypatch):
+    monkeypatch.setenv("ISU_TEST_HIDE_PHONE", "1")   # the double hides the phone in the driver's hand
+    assert _dataset(tmp_path / "ds", "--n", "12", "--seed", "2") == 0
+    metadata = {r["file_name"]: r for r in _rows(tmp_path / "ds")}
+    judge = make_judge("vqa", SPACE)
+    hidden = 0
+    for chat in _rows(tmp_path / "ds", "vqa.jsonl"):
+        row, (user, assistant) = metadata[chat["file_name"]], chat["messages"]
+        answer = json.loads(assistant["content"][0]["text"])
+        if row["scene"].get("phone_position", "NONE") != "NONE":
+            hidden += 1
+            assert "phone_position" in row["occluded"] and row["truth"]["phone_position"] == "YES"
+            assert "phone_position" not in answer and "phone_position" not in user["content"][0]["text"]
+        else:
+            assert answer["phone_position"] == "NO"   # nothing to see is never occluded: still asked
+        # what is asked is answered right: the real judge scores the row's answer 1.0
+        request = build_request(SPACE, row["scene"], tmp_path / "ds" / chat["file_name"], "vqa")
+        response = interpret(request, Exchange(raw=json.dumps(answer), content=answer))
+        assert judge.judge(row["scene"], request, response, occluded=row["occluded"]).primary == 1.0
+    assert hidden >= 3
+    card = (tmp_path / "ds" / "DATASET_CARD.md").read_text()
+    assert "left out of that row's questions and answer in `vqa.jsonl`" in card
 
 
 def _cli(out: Path, *extra: str) -> list[str]:

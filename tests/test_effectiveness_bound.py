@@ -73,14 +73,14 @@ def test_the_bound_beats_random_picks_on_a_planted_blind_spot():
     assert sum(r.failed for r in bound.records) > 2 * sum(r.failed for r in rs.records)
 
 
-def test_the_bench_adds_the_bound_as_a_reference_row(monkeypatch, capsys):
+def test_the_bench_adds_the_bound_as_a_reference_row(monkeypatch, capsys, tmp_path):
     monkeypatch.setattr(bound_module, "risk_bank", lambda space, sut: risk_bank(space, sut, size=300, seeds=2))
     assert main(["bench", "effectiveness", "--suts", "blind-spots", "--algorithms", "surrogate,rs", "--seeds", "2",
                  "--budget", "24", "--pop-size", "8", "--bound", "2"]) == 0
     text = capsys.readouterr().out
     for needle in ("bound/rs", "a reference, not a search", "bound - rs entropy"):
         assert needle in text, needle
-    assert main(["bench", "effectiveness", "--bound", "2", "--pipeline", "--out", "x"]) == 2
+    assert main(["bench", "effectiveness", "--bound", "2", "--pipeline", "--out", str(tmp_path / "x")]) == 2
     assert "--bound runs in memory" in capsys.readouterr().err
     for alpha in ("-1", "nan"):
         assert main(["bench", "effectiveness", "--bound", alpha]) == 2

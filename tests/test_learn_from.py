@@ -74,10 +74,11 @@ def test_what_cannot_be_learnt_from_is_refused_before_anything_is_written(tmp_pa
     assert "this run's own folder" in capsys.readouterr().err
 
 
-def test_the_bench_measures_a_surrogate_that_learnt_first(capsys):
+def test_the_bench_measures_a_surrogate_that_learnt_first(tmp_path, capsys):
     from isu_validate.cli import main
     assert main(["bench", "effectiveness", "--suts", "blind-spots", "--algorithms", "surrogate,rs", "--seeds", "2",
                  "--budget", "24", "--pop-size", "8", "--prior-tests", "60"]) == 0
     assert "learnt first from 60 earlier random tests per run" in capsys.readouterr().out
-    assert main(["bench", "effectiveness", "--prior-tests", "60", "--pipeline", "--out", "x"]) == 2
-    assert "run --learn-from" in capsys.readouterr().err
+    out = tmp_path / "x"
+    assert main(["bench", "effectiveness", "--prior-tests", "60", "--pipeline", "--out", str(out)]) == 2
+    assert "run --learn-from" in capsys.readouterr().err and not out.exists()   # a refused option: no folder

@@ -67,18 +67,78 @@ def test_extra_retrains_on_the_stored_features_and_compares_on_the_same_held_out
     base_card = json.loads((base / "model_card.json").read_text())
     assert card["training_scenes"] == 45 and card["base_training_scenes"] == 40
     assert card["held_out_scenes"] == 20                      # the base's held-out scenes, nothing else
-    assert card["extra"] == [{"dataset": str(dataset), "images": 5, "labels_left_out": 5}]
+    assert card["extra"] == [{"dataset": str(dataset.resolve()), "content_hash": content_hash_of(dataset),
+                              "images": 5, "labels_left_out": 5, "runs": []}]
     for name, row in card["comparison"].items():              # the base evaluated on the same stored features
         assert row["base"] == base_card["held_out"]["per_feature"][name]["accuracy"]
         assert row["change"] == pytest.approx(row["retrained"] - row["base"])
     assert set(card["comparison"]) == set(base_card["held_out"]["per_feature"])
     text = (out / "MODEL_CARD.md").read_text()
     assert "| feature | base | retrained | change | n |" in text and "Worst change" in text
+    assert f"`{dataset.resolve()}` (content hash {content_hash_of(dataset)})" in text
+    name, row = next(iter(card["comparison"].items()))   # accuracies in %, changes in points, as the README
+    assert f"| {name} | {100 * row['base']:.1f}% | {100 * row['retrained']:.1f}% | {100 * row['change']:+.1f} pt |" \
+        in text
     assert "model_dir=" in capsys.readouterr().out
     assert len(load_feature_set(out / "train_features.npz").scenes) == 45   # it can be a base in turn
     # the occluded T-shirt colour is not learnt from: 40 base rows + 0 of the dataset's
     heads, _ = load_heads(out)
     assert {h.feature for h in heads} == {f.name for f in SPACE.predicted}
+
+
+def content_hash_of(dataset: Path) -> str:
+    """The images' bytes and their labels (occluded features left out), as the card should name them."""
+    import hashlib
+
+    digest = hashlib.sha256()
+    for row in map(json.loads, (dataset / "metadata.jsonl").read_text().splitlines()):
+        digest.update((dataset / row["file_name"]).read_bytes())
+        labels = {k: v for k, v in SPACE.canonical(row["scene"]).items() if k not in row["occluded"]}
+        digest.update(json.dumps(labels, sort_keys=True).encode())
+    return digest.hexdigest()[:16]
+
+
+def test_the_card_names_the_runs_behind_a_focused_dataset_and_its_reproduce_line_runs_as_printed(
+        tmp_path, base, same_backbone, monkeypatch, capsys):
+    import shlex
+
+    dataset = make_dataset(tmp_path / "ds")
+    info = json.loads((dataset / "dataset.json").read_text())
+    info["focus"] = {"mode": "failing", "runs": ["runs/find"], "judged_by": [
+        {"run": "/abs/runs/find", "sut": "reference", "sut_options": {}, "threshold": 0.9, "tests": 150,
+         "failing": 19}]}
+    (dataset / "dataset.json").write_text(json.dumps(info))
+    out = tmp_path / "m"
+    assert main(["reference", "train", "--extra", str(dataset), "--base", str(base), "--out", str(out)]) == 0
+    card = json.loads((out / "model_card.json").read_text())
+    assert card["extra"][0]["runs"] == [{"run": "/abs/runs/find", "sut": "reference", "sut_options": {},
+                                         "threshold": 0.9}]
+    text = (out / "MODEL_CARD.md").read_text()
+    assert "drawn near the tests of `/abs/runs/find` (SUT `reference`, failing below threshold 0.9)" in text
+    printed = shlex.split(card["reproduce"])
+    assert f"- Reproduce: `{card['reproduce']}`" in text and printed[:3] == ["isu-validate", "reference", "train"]
+    heads = (out / "heads.npz").read_bytes()
+    monkeypatch.chdir(tmp_path)   # absolute paths: it runs from any folder, and makes the same model
+    capsys.readouterr()
+    assert main(printed[1:]) == 0
+    assert (out / "heads.npz").read_bytes() == heads
+
+
+@pytest.mark.parametrize("what, expected", [("missing", "does not exist"),
+                                            ("run", "holds the output of `isu-validate run` (run.json), not a "
+                                                    "reference ISU model"),
+                                            ("empty", "holds no heads.npz, not a reference ISU model")])
+def test_a_base_that_is_no_model_is_named_for_what_it_is(tmp_path, what, expected, capsys):
+    base = tmp_path / "find"
+    if what != "missing":
+        base.mkdir()
+    if what == "run":
+        (base / "run.json").write_text("{}")
+    dataset = make_dataset(tmp_path / "ds")
+    assert main(["reference", "train", "--extra", str(dataset), "--base", str(base), "--out", str(tmp_path / "m")]) == 2
+    err = capsys.readouterr().err
+    assert f"--base {base} {expected}" in err and "name a model folder (one with heads.npz" in err
+    assert "trained before features were kept" not in err and not (tmp_path / "m").exists()
 
 
 def test_a_second_retrain_of_the_same_dataset_embeds_nothing(tmp_path, base, same_backbone, monkeypatch):

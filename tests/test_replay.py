@@ -155,6 +155,40 @@ def test_a_replay_counts_fixed_and_new_failures_as_the_run_judged(stored_run, tm
     assert f"New failures ({s['new']})" in html and f"Fixed failures ({s['fixed']})" in html
 
 
+def test_a_replay_names_the_model_it_asked_on_the_terminal_in_the_title_and_the_summary(stored_run, tmp_path,
+                                                                                         capsys, monkeypatch):
+    """v1 against v2: which model gave the "now" answers is named wherever the result is shown, and the
+    failures that persist are shown too (a replay that fixed nothing and broke nothing still has pictures)."""
+    monkeypatch.setattr(DoubleSUT, "model_version", "model v2 of the double", raising=False)
+    out = tmp_path / "replay"
+    assert _replay(stored_run, out, "replay-double:truth") == 0
+    s = _summary(out)
+    version = s["settings"]["sut_version"]
+    assert (version["spec"], version["model"]) == ("replay-double:truth", "model v2 of the double")
+    label = version["label"]
+    assert label == f"replay-double:truth (model v2 of the double; fingerprint {version['fingerprint']})"
+    assert f"against {label}" in capsys.readouterr().out.splitlines()[0]
+    html = (out / "report.html").read_text()
+    assert f"<title>Regression replay: {label}</title>" in html
+    s_mixed = tmp_path / "mixed"
+    assert _replay(stored_run, s_mixed, "replay-double:mixed") == 0
+    persisting = _summary(s_mixed)["persisting"]
+    assert persisting and f"Persisting failures ({persisting})" in (s_mixed / "report.html").read_text()
+
+
+def test_the_reference_isu_is_named_by_its_folder_and_heads_hash():
+    import hashlib
+
+    from isu_validate.reference.adapter import ReferenceAdapter
+    from isu_validate.reference.model import default_model_dir
+    from isu_validate.sut.version import sut_version
+
+    folder = default_model_dir()
+    heads = hashlib.sha1((folder / "heads.npz").read_bytes()).hexdigest()[:12]
+    label = sut_version("reference", ReferenceAdapter(space=iv.load_space("isu-paper")))["label"]
+    assert label.startswith(f"reference (model {folder.resolve()}, heads {heads}; fingerprint ")
+
+
 def test_the_counts_follow_the_threshold_given(stored_run, tmp_path):
     out = tmp_path / "replay"
     assert _replay(stored_run, out, "replay-double:mixed", "--threshold", "0.9") == 0
@@ -327,7 +361,8 @@ def test_the_command_calls_the_public_function(stored_run, tmp_path, monkeypatch
                  "--repeats", "2"]) == 0
     (run, out, settings), _ = calls[0]
     assert isinstance(settings, iv.ReplaySettings) and (settings.sut, settings.repeats) == ("replay-double:truth", 2)
-    result = iv.replay_run(stored_run, tmp_path / "r", iv.ReplaySettings(sut="replay-double:truth", threshold=0.8))
+    result = iv.replay_run(stored_run, tmp_path / "r", iv.ReplaySettings(sut="replay-double:truth", threshold=0.8),
+                           overwrite=True)   # other settings than the command's replay in the same folder
     assert (result.new, result.persisting) == (0, 0) and result.fixed == result.summary["failures_before"]
     assert set(result.rates) == {1.0, 0.9, 0.8, 0.7, 0.6, 0.5} and result.rates[0.8][1] == 0.0
     assert 0 < result.p <= 1 and result.exit_code == 0

@@ -102,6 +102,19 @@ def test_the_run_command_writes_the_single_run_report(tmp_path, monkeypatch):
         assert f"<h2>{heading}</h2>" in html
 
 
+def test_the_single_run_report_shows_rates_with_one_decimal_as_the_report_over_runs(runs_root):
+    from isu_validate.analysis import write_run_report
+    from isu_validate.analysis.rq1 import run_rates
+
+    run = sorted(runs_root.iterdir())[0]
+    row = run_rates(load_run(run))
+    html = html_of(write_run_report(run))
+    rates = [row[rate_key(t)] for t in load_run(run).thresholds]
+    assert any(round(r, 1) != round(r, 3) for r in rates)   # a rate such as 16.667 is on the page
+    for r in rates:
+        assert f"<td>{r:.1f}</td>" in html and f"<td>{r:.3f}</td>" not in html.replace(f"<td>{r:.1f}</td>", "")
+
+
 def test_failure_analysis_finds_the_doubles_known_faults(runs_root):
     runs = [load_run(p) for p in sorted(runs_root.iterdir())]
     rows, pairs = feature_errors(runs)
@@ -167,6 +180,30 @@ def test_report_command_writes_html_and_every_table(runs_root, tmp_path, capsys)
     assert float(gaps[0]["min"]) <= float(gaps[0]["mean"]) <= float(gaps[0]["max"]) and "Entropy difference" in html
     assert " · cluster " in html  # gallery cards name their RQ2 cluster
     assert html.count("<script>") == 1 and "data:image/png;base64," in html
+
+
+def test_the_report_states_thresholds_reads_as_prose_and_prints_its_failure_regions(runs_root, tmp_path, capsys):
+    one = sorted(runs_root.iterdir())[0]
+    out = tmp_path / "report"
+    assert main(["report", str(one), "--out", str(out), "--embedding", "scene"]) == 0
+    printed = capsys.readouterr()
+    assert "report: 1 run, " in printed.err and "1 runs" not in printed.err
+    rules = json.loads((out / "report.json").read_text())["tables"]["regions"]
+    assert rules and "failure regions (decision-tree rules where most tests fail):" in printed.out
+    for r in rules:   # the terminal says what the report's regions table says
+        assert f"  {r['rule']}: {r['failing']} of {r['tests']} tests failing" in printed.out
+    html = html_of(out / "report.html")
+    runs = list(csv.DictReader(open(out / "runs.csv")))
+    assert runs[0]["oracle_threshold"] == str(load_run(one).oracle_threshold)
+    assert "<th>oracle_threshold</th>" in html and "1 run ·" in html
+    assert "{'vqa'" not in html and "vqa: f_qa" in html   # settings read as prose, not Python dicts
+
+
+def test_entropy_of_an_even_spread_is_exactly_one():
+    from isu_validate.analysis.diversity import normalised_entropy
+    for k in (5, 7, 12):   # float error: 1.0000000000000002 for 5 and 12, 0.9999999999999999 for 7 before rounding
+        assert normalised_entropy(list(range(k)) * 3, k) == 1.0
+    assert normalised_entropy([0, 0], 3) == 0.0
 
 
 def test_report_errors_name_the_problem(tmp_path, capsys):

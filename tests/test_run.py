@@ -85,8 +85,10 @@ def test_export_csv_has_the_contract_columns(tmp_path):
 
 def test_an_existing_run_is_not_overwritten_and_resume_checks_the_configuration(tmp_path):
     run_search(config(tmp_path / "run", budget_tests=6))
-    with pytest.raises(RunError, match="--resume"):
+    with pytest.raises(RunError, match="pass resume=True to continue it or choose another folder for the run_dir "
+                                       "argument") as refused:   # the API's words, not the command line's
         run_search(config(tmp_path / "run", budget_tests=6))
+    assert "pass --resume to continue it or choose another folder for --out" in refused.value.on_command_line()
     with pytest.raises(RunError, match="different configuration"):
         run_search(config(tmp_path / "run", seed=99), resume=True)
     summary = run_search(config(tmp_path / "run", budget_tests=12), resume=True)

@@ -17,6 +17,7 @@ import sys
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
+from ..archive.output_dir import claim_output
 from ..atomic import atomic_open, write_text
 from ..pairs import PairsDir, PairsError, Sample
 from ..space import SceneSpace, SpaceError, load_space
@@ -66,17 +67,16 @@ class AgreeResult:
 
 
 def measure_agreement(pairs_path: str | os.PathLike, out: str | os.PathLike, settings: AgreeSettings,
-                      log=None) -> AgreeResult:
+                      log=None, overwrite: bool = False) -> AgreeResult:
     """Ask the SUT about every render and real photo of a pairs directory and compare per feature
-    (``isu-validate agree``): writes ``out/agreement.csv``, ``summary.json``, ``report.html``.
+    (``isu-validate agree``): writes ``out/agreement.csv``, ``summary.json``, ``report.html``. ``out`` must be
+    new or this same agreement's folder (it goes on where it stopped); anything else needs ``overwrite``.
 
         result = measure_agreement("pairs/", "agree/", AgreeSettings(sut="reference", repeats=3))
         result.summary["agreement_rate"]
     """
     log = log or (lambda text: print(f"agree: {text}", file=sys.stderr, flush=True))
     out = Path(out)
-    if out.exists() and not out.is_dir():
-        raise InputError(f"--out {out} is a file; name a folder for the report")
     samples = PairsDir(pairs_path).samples()
     validity = tally(samples)
     space = _space(samples, settings.space)
@@ -90,7 +90,10 @@ def measure_agreement(pairs_path: str | os.PathLike, out: str | os.PathLike, set
         log(text)
 
     try:
-        out.mkdir(parents=True, exist_ok=True)   # only now: a bad option or input leaves no folder behind
+        identity = {"pairs": str(Path(pairs_path).resolve()), "sut_fingerprint": sut.adapter.fingerprint,
+                    "repeats": settings.repeats, "include_invalid": settings.include_invalid}
+        # only now: a bad option or input leaves no folder behind
+        claim_output(out, "agree", identity, overwrite=overwrite).mark()
         for k, sample in enumerate(samples, 1):
             if validity.by_sample.get(sample.name) == INVALID and not settings.include_invalid:
                 problem(f"{sample.name}: voted not the same scenario by its annotators: left out "

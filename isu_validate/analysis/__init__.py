@@ -15,18 +15,19 @@ def write_run_report(run_dir: Path) -> Path:
     return write(Path(run_dir))
 
 
-def build_report(run_paths, out_dir: Path, settings=None) -> Path:
+def build_report(run_paths, out_dir: Path, settings=None, overwrite: bool = False) -> Path:
     """Compare runs (``isu-validate report``): ``out_dir/report.html`` plus CSV/JSON tables."""
     from .multi_report import build_report as build
-    return build(run_paths, Path(out_dir), settings)
+    return build(run_paths, Path(out_dir), settings, overwrite=overwrite)
 
 
 def report(runs, out: str | os.PathLike, *, embedding: str = "inception", clusters: int | None = None,
-           gallery: int | None = None, seed: int = 0) -> Path:
+           gallery: int | None = None, seed: int = 0, overwrite: bool = False) -> Path:
     """Compare runs as ``isu-validate report`` does: ``out/report.html``, ``out/report.json`` and one CSV
     per table; returns the HTML's path. ``runs``: run directories (a folder of runs stands for all of
     them); ``embedding``: ``inception``, ``scene`` (no images) or ``clip:PATH``; ``clusters`` (k of
-    k-means, default 10) and ``gallery`` (failing scenes shown, default 60) as the command's flags.
+    k-means, default 10) and ``gallery`` (failing scenes shown, default 60) as the command's flags. ``out``
+    must be new or this same report's folder; another command's output (a run) needs ``overwrite=True``.
 
         report(["runs/surrogate-s1", "runs/rs-s1"], "report/", embedding="scene")
     """
@@ -39,7 +40,8 @@ def report(runs, out: str | os.PathLike, *, embedding: str = "inception", cluste
     if shown < 0:
         raise InputError(f"--gallery must be 0 or more, got {shown}")
     runs = [runs] if isinstance(runs, (str, os.PathLike)) else list(runs)   # one run, not its characters
-    return build_report(runs, out, ReportSettings(embedding=embedding, k=k, seed=seed, gallery=shown))
+    return build_report(runs, out, ReportSettings(embedding=embedding, k=k, seed=seed, gallery=shown),
+                        overwrite=overwrite)
 
 
 __all__ = ["build_report", "report", "write_run_report"]

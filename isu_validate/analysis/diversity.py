@@ -69,7 +69,8 @@ def normalised_entropy(labels, k: int) -> float:
     if k == 1:
         return 0.0
     p = counts[counts > 0] / total
-    return float(-(p * np.log(p)).sum() / math.log(k))
+    # rounded: an even spread is 1, not 1.0000000000000002 (float error in the sum)
+    return round(min(1.0, float(-(p * np.log(p)).sum() / math.log(k))), 12)
 
 
 CLUSTERINGS = 5   # k-means seeds an entropy gap is checked over (the first is the reported clustering)

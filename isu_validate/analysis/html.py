@@ -70,6 +70,16 @@ def fmt(value, digits: int = 3) -> str:
     return str(value)
 
 
+def percent(value) -> str:
+    """A percentage as every report shows one: one decimal ("16.7"), an en dash for no value."""
+    return fmt(value) if not isinstance(value, (int, float)) or value != value else f"{value:.1f}"
+
+
+def plural(n: int, word: str) -> str:
+    """ "1 run", "2 runs". """
+    return f"{n} {word}" + ("" if n == 1 else "s")
+
+
 def threshold_label(t: float) -> str:
     """1.0, 0.9, 0.65: at least one decimal, so a threshold never reads as a count."""
     return f"{t:.1f}" if round(t, 1) == t else f"{t:g}"

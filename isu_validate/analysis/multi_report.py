@@ -5,15 +5,16 @@ from __future__ import annotations
 import sys
 import time
 from collections import defaultdict
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
 from ..archive import find_runs
+from ..archive.output_dir import claim_output
 from ..atomic import write_text
 from . import plots
 from .embeddings import Embedder, make_embedder
-from .html import esc, figure, page, paragraph, section, table, threshold_label
+from .html import esc, figure, page, paragraph, plural, section, table, threshold_label
 from .rq1 import comparisons, rate_key, rq1_table, run_rates
 from .rq2 import Diversity, measure_diversity
 from .runs import Run, load_run, name_uniquely
@@ -36,15 +37,16 @@ class ReportSettings:
 
 
 def build_report(run_paths: list, out_dir: Path, settings: ReportSettings | None = None,
-                 log=lambda msg: print(msg, file=sys.stderr)) -> Path:
+                 log=lambda msg: print(msg, file=sys.stderr), overwrite: bool = False) -> Path:
     settings = settings or ReportSettings()
     embedder = make_embedder(settings.embedding)  # fail on a bad embedding before reading runs
     runs = name_uniquely([load_run(p) for p in find_runs(run_paths)])
     if not runs:
         raise InputError("no runs given; pass one or more run directories")
-    log(f"report: {len(runs)} runs, {sum(len(r.records) for r in runs)} tests")
+    log(f"report: {plural(len(runs), 'run')}, {plural(sum(len(r.records) for r in runs), 'test')}")
     out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
+    claim_output(out_dir, "report", {"runs": sorted(str(r.path.resolve()) for r in runs), **asdict(settings)},
+                 overwrite=overwrite).mark()
     settings_groups = settings_of(runs)
     parts = [overview(runs), rq1_part(runs), timeline_part(runs)]
     for (sut, mode), members in settings_groups.items():
@@ -61,7 +63,7 @@ def build_report(run_paths: list, out_dir: Path, settings: ReportSettings | None
         write_csv(out_dir / f"{name}.csv", rows)
     meta = report_settings(runs, settings, embedder)
     write_json(out_dir / "report.json", {"settings": meta, "tables": tables})
-    html = page("isu-validate report", f"{len(runs)} runs · embedding {embedder.name} · k = {settings.k}",
+    html = page("isu-validate report", f"{plural(len(runs), 'run')} · embedding {embedder.name} · k = {settings.k}",
                 [settings_section(meta)] + [p.html for p in parts])
     return write_text(out_dir / "report.html", html)
 
@@ -107,17 +109,26 @@ def report_settings(runs: list[Run], settings: ReportSettings, embedder: Embedde
 
 
 def settings_section(meta: dict) -> str:
-    rows = [{"setting": k, "value": v} for k, v in meta.items() if k not in ("runs", "versions")]
+    rows = [{"setting": k, "value": _readable(v)} for k, v in meta.items() if k not in ("runs", "versions")]
     rows.append({"setting": "versions", "value": ", ".join(f"{k} {v}" for k, v in meta["versions"].items())})
     return section("Settings", "<details><summary>how these numbers were made</summary>"
                    + table(["setting", "value"], rows) + "</details>", anchor="settings")
 
 
+def _readable(value) -> str:
+    """A setting for people: {"vqa": [1.0, 0.9]} reads "vqa: 1.0, 0.9", not as a Python dict."""
+    if isinstance(value, dict):
+        return "; ".join(f"{k}: {_readable(v)}" for k, v in value.items())
+    if isinstance(value, (list, tuple)):
+        return ", ".join(_readable(v) for v in value)
+    return str(value)
+
+
 # ------------------------------------------------------------------ overview and RQ1
 def overview(runs: list[Run]) -> Part:
-    rows = [run_rates(r) for r in runs]
-    columns = ["run", "sut", "mode", "algorithm", "seed", "tests", "with_verdict", "failures", "sut_errors",
-               "render_errors", "occluded"]
+    rows = [{**run_rates(r), "oracle_threshold": r.oracle_threshold} for r in runs]
+    columns = ["run", "sut", "mode", "algorithm", "seed", "oracle_threshold", "tests", "with_verdict", "failures",
+               "sut_errors", "render_errors", "occluded"]
     return Part(section("Runs", table(columns, rows), anchor="runs"), {"runs": rows})
 
 

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from ..atomic import write_text
 from . import plots
-from .html import figure, page, paragraph, section, stat, table, threshold_label
+from .html import figure, page, paragraph, percent, section, stat, table, threshold_label
 from .rq1 import rate_key, run_rates
 from .runs import Run, load_run
 from .sections import errors, failure_gallery, feature_analysis, regions
@@ -40,7 +40,7 @@ def summary(run: Run) -> str:
     wall = max((run.elapsed(r) for r in run.records), default=0.0)
     cards = "".join([stat("tests", row["tests"]), stat("with a verdict", row["with_verdict"]),
                      stat(oracle, row["failures"], "bad" if row["failures"] else ""),
-                     stat("failure rate (%)", rate),
+                     stat("failure rate (%)", percent(rate)),
                      stat("SUT errors", row["sut_errors"], "warn" if row["sut_errors"] else ""),
                      stat("render errors", row["render_errors"], "warn" if row["render_errors"] else ""),
                      stat("occluded features (not judged)", row["occluded"]),
@@ -57,7 +57,7 @@ def thresholds_section(run: Run) -> str:
     row = run_rates(run)
     values = [run.metric(r) for r in run.valid]
     rows = [{"threshold": threshold_label(t), "failing": sum(fails_at(run.mode, v, t) for v in values),
-             "failure rate (%)": row[rate_key(t)]} for t in run.thresholds]
+             "failure rate (%)": percent(row[rate_key(t)])} for t in run.thresholds]
     text = (f"A test fails at threshold t when {run.metric_key} {FAIL_RULES.get(run.mode, '<')} t; rates over the "
             f"{len(values)} tests with a verdict (SUT and render errors are left out).")
     return section("Failure rates at thresholds", paragraph(text),

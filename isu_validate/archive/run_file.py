@@ -9,12 +9,11 @@ and a budget smaller than the stored one (a budget may only grow).
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 from ..atomic import write_json
-from ..errors import UserError
+from ..errors import UserError, in_python_words
+from .output_dir import Difference, Output, claim_output, differences_between  # noqa: F401 (resume checks name them here)
 from .run_dir import ARCHIVE_FILE, RUN_FILE, RunDir, RunDirError  # noqa: F401 (the run's writers name them here)
 
 # budgets that may only grow on --resume: RunConfig field -> what the user calls it
@@ -25,24 +24,15 @@ class RunError(UserError, RuntimeError):
     """A run directory that cannot be started or resumed as asked; the message names the fix."""
 
 
-@dataclass(frozen=True)
-class Difference:
-    setting: str     # e.g. "seed" or "pipeline.sut"
-    stored: Any
-    now: Any
-
-    def __str__(self) -> str:
-        return f"{self.setting}: {self.stored!r} in the stored run, {self.now!r} now"
-
-
 class ResumeMismatch(RunError):
     """Resuming with settings that change what the run measures."""
 
     def __init__(self, run_dir: Path, differences: list[Difference]):
         self.run_dir, self.differences = run_dir, differences
         listed = "; ".join(str(d) for d in differences)
-        super().__init__(f"{run_dir} holds a run with a different configuration ({listed}); resume it without "
-                         f"these options (the stored ones are used) or start a new run with another --out")
+        self.template = (f"{run_dir} holds a run with a different configuration ({listed}); resume it with the "
+                         "stored settings or start a new run in another folder for {out}")
+        super().__init__(in_python_words(self.template, argument="run_dir"))
 
 
 def read_run_file(run_dir: str | os.PathLike) -> dict:
@@ -54,7 +44,8 @@ def read_run_file(run_dir: str | os.PathLike) -> dict:
 
 
 def write_run_file(run_dir: str | os.PathLike, content: dict) -> Path:
-    """Atomically: a killed start leaves either no run.json or a whole one."""
+    """Atomically: a killed start leaves either no run.json or a whole one. The folder's marker first."""
+    Output(Path(run_dir), "run", content.get("identity", {})).mark()
     return write_json(Path(run_dir) / RUN_FILE, content, indent=2, default=str)
 
 
@@ -63,12 +54,14 @@ def check_run_dir(run_dir: str | os.PathLike, identity: dict, space_hash: str, b
     """Whether ``run_dir`` starts a new run (True) or resumes the stored one (False); raises
     RunError when neither is possible as asked.  Writes nothing."""
     run_dir = Path(run_dir)
+    claim_output(run_dir, "run", identity, resume=True, overwrite=None, argument="run_dir")  # another command's?
     if not (run_dir / RUN_FILE).exists():
         if resume and run_dir.exists() and any(run_dir.iterdir()):
             raise RunError(f"nothing to resume: {run_dir / RUN_FILE} is missing")
         return True
     if not resume:
-        raise RunError(f"{run_dir} already holds a run; pass --resume to continue it or choose another --out")
+        raise RunError.naming(f"{run_dir} already holds a run; pass {{resume}} to continue it or choose another "
+                              "folder for {out}", argument="run_dir")
     stored = read_run_file(run_dir)
     differences = differences_between(stored.get("identity", {}), identity)
     if differences:
@@ -78,18 +71,6 @@ def check_run_dir(run_dir: str | os.PathLike, identity: dict, space_hash: str, b
                           f"{space_hash}); start a new run")
     _check_budgets(run_dir, stored.get("config", {}), budgets)
     return False
-
-
-def differences_between(stored: dict, now: dict, prefix: str = "") -> list[Difference]:
-    """Every setting (nested dicts flattened to dotted names) whose value differs."""
-    out = []
-    for key in sorted(set(stored) | set(now)):
-        a, b = stored.get(key), now.get(key)
-        if isinstance(a, dict) and isinstance(b, dict) and key != "sut_options":
-            out += differences_between(a, b, f"{prefix}{key}.")
-        elif a != b:
-            out.append(Difference(prefix + key, a, b))
-    return out
 
 
 def _check_budgets(run_dir: Path, stored: dict, budgets: dict) -> None:

@@ -18,6 +18,7 @@ import sys
 from pathlib import Path
 
 from ..errors import InputError
+from . import add_overwrite_option
 
 INTERRUPTED = ("interrupted; the SUT replies so far are cached in {cache}: run the same command again to go on, "
                "nothing already answered is asked again")
@@ -35,6 +36,7 @@ def register(sub) -> None:
     p.add_argument("--repeats", type=int, default=3, help="SUT queries per image, per-feature majority (default 3)")
     p.add_argument("--space", help="scene space (default: the one named in the samples' scene.json)")
     p.add_argument("--out", type=Path, help="report folder")
+    add_overwrite_option(p, "an agreement of other pairs or another SUT, or another command's output")
     p.add_argument("--include-invalid", action="store_true", help="keep pairs the annotators voted invalid")
     p.add_argument("--no-realism", action="store_true", help="skip FID/KID (the Inception pass is the slow part)")
     p.add_argument("--feature-cache", help="Inception feature cache folder (default ~/.cache/isu-validate/...)")
@@ -62,7 +64,7 @@ def run(args) -> int:
                              include_invalid=args.include_invalid, realism=not args.no_realism,
                              threads=args.threads, feature_cache=args.feature_cache, sut_timeout_s=args.sut_timeout,
                              sut_options=parse_options(args.sut_option))
-    result = measure_agreement(args.target[0], args.out, settings)
+    result = measure_agreement(args.target[0], args.out, settings, overwrite=args.overwrite)
     s = result.summary
     if args.json:
         print(json.dumps(s, indent=2))

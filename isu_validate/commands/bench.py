@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import importlib
 
-from . import chosen
+from . import add_overwrite_option, chosen
 
 # bench NAME -> its one-line summary (the module is isu_validate.bench.NAME)
 BENCHES = {
@@ -34,6 +34,31 @@ def register(sub, argv: list[str] | None = None) -> None:
     for name, summary in BENCHES.items():
         if after is None or name == wanted:
             importlib.import_module(f"isu_validate.bench.{name}").register_bench(bench_sub)
+            _claims_its_out(bench_sub.choices[name], name)
         else:
             bench_sub.add_parser(name, help=summary, add_help=False)
     parser.set_defaults(func=lambda args: parser.print_help() or 2)
+
+
+def _claims_its_out(parser, name: str) -> None:
+    """A benchmark with ``--out`` refuses a folder that holds another command's output (``archive/output_dir.py``),
+    as every command does; ``--overwrite`` says otherwise. Its own earlier output is the benchmark's business:
+    ``bench augment`` and ``bench effectiveness --pipeline`` resume it and refuse other settings themselves, the
+    others measure again into it."""
+    run = parser.get_default("func")
+    if run is None or "out" not in {a.dest for a in parser._actions}:
+        return
+    add_overwrite_option(parser, "another command's output")
+
+    def claimed(args):
+        if args.out is None:
+            return run(args)
+        from ..archive.output_dir import claim_output
+        output = claim_output(args.out, f"bench {name}", {}, resume=True, overwrite=args.overwrite)
+        try:
+            return run(args)
+        finally:   # marked once the benchmark made it: a refused option leaves no folder behind
+            if output.path.is_dir():
+                output.mark()
+
+    parser.set_defaults(func=claimed)

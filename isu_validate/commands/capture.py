@@ -69,6 +69,9 @@ def run_shoot(args) -> int:
     if (args.out is None) == (args.pair is None):
         raise InputError("give --out DIR (a session folder) or --pair PAIRS/<sample>, one of the two")
     sample = _pair(args.pair) if args.pair else None
+    if args.out:   # another command's output is refused here; another session's frames by shoot
+        from isu_validate.archive.output_dir import claim_output
+        claim_output(args.out, "capture shoot", {}, resume=True, overwrite=None)
 
     def progress(i, n, meta):
         exp = meta.get("exposure_us")

@@ -17,6 +17,8 @@ import json
 import sys
 from pathlib import Path
 
+from . import add_overwrite_option
+
 EPILOG = """a camera file with an imaging model develops every render through it:
   isu-validate render scene.json --camera CAM2.toml --out sim.png
   isu-validate run --camera CAM2.toml --out runs/cam2
@@ -74,6 +76,7 @@ def register(sub) -> None:
     chk.add_argument("real_dir", type=Path, nargs="?", metavar="REAL_DIR", help="captures named like the renders")
     chk.add_argument("--out", type=Path, default=Path("exposure-check"), help="folder for report.html and check.json")
     chk.add_argument("--json", action="store_true")
+    add_overwrite_option(chk, "a check of other folders, or another command's output")
     chk.set_defaults(func=_check)
     p.set_defaults(func=lambda args: p.print_help() or 2)
 
@@ -142,6 +145,13 @@ def _print_fit(summary: dict, args) -> None:
     print(f"wrote {args.out}" + (f", {args.plot}" if args.plot else ""))
 
 
+def _claim(out: Path, command: str, settings: dict, overwrite: bool | None, resume: bool = False) -> None:
+    """``out`` is new or this command's own with these settings (paths as absolute); marked as it."""
+    from isu_validate.archive.output_dir import claim_output
+    settings = {k: str(Path(v).resolve()) if isinstance(v, Path) else v for k, v in settings.items()}
+    claim_output(out, command, settings, overwrite=overwrite, resume=resume).mark()
+
+
 def _apply(args) -> int:
     from capture.camera_model.develop import develop_file, develop_run
     from isu_validate.errors import InputError
@@ -151,6 +161,8 @@ def _apply(args) -> int:
                          "with `isu-validate exposure fit`")
     if args.target.is_dir():
         out = args.out or args.target / f"camera-{rig.name}"
+        # another command's output is refused here; renders of another camera by develop_run, which resumes
+        _claim(out, "exposure apply", {"run": args.target}, overwrite=None, resume=True)
 
         def progress(i, n, row):
             print(f"\r[{i}/{n}] {Path(row['image']).name}", end="", file=sys.stderr)
@@ -217,7 +229,7 @@ def _check(args) -> int:
     from capture.camera_model.check import compare, stand_in_banner, write_html, write_json
     from isu_validate.render.outputs import by_product
     result = compare(args.sim_dir, args.real_dir, by_product)
-    args.out.mkdir(parents=True, exist_ok=True)
+    _claim(args.out, "exposure check", {"sim": args.sim_dir, "real": args.real_dir}, overwrite=args.overwrite)
     write_json(result, args.out / "check.json")
     page = write_html(result, args.out / "report.html")
     s = result["summary"]

@@ -12,6 +12,7 @@ from dataclasses import asdict
 from pathlib import Path
 
 from ..errors import InputError
+from . import add_overwrite_option
 
 PAIR_COMPARISONS = (("sim", "real"), ("nst", "real"), ("sim", "nst"))
 
@@ -24,7 +25,8 @@ def register(sub) -> None:
     p.add_argument("sets", nargs="*", metavar="SET", help="two sets: DIR or PAIRS_DIR:ROLE")
     p.add_argument("--pairs", type=Path, help="sim/real pairs directory: compare all its roles pairwise")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
-    p.add_argument("--out", type=Path, help="also write the JSON result to this file")
+    p.add_argument("--out", type=Path, help="also write the JSON result to this file (a new one)")
+    add_overwrite_option(p, "a file that exists, or into another command's output folder")
     p.add_argument("--bootstrap", type=int, default=200,
                    help="FID bootstrap resamples for the CI; 0 skips (default 200)")
     p.add_argument("--ci-level", type=float, default=0.95)
@@ -85,6 +87,9 @@ def _run(args) -> int:
     from isu_validate.realism.cache import default_cache_dir
 
     comparisons = _comparisons(args)
+    if args.out:   # before the slow part: a refused --out costs nothing
+        from isu_validate.archive.output_dir import claim_output_file
+        claim_output_file(args.out, "realism", overwrite=args.overwrite)
     cache = None if args.no_cache else (args.cache_dir or default_cache_dir())
     extractor = FeatureExtractor(args.weights, args.resize_filter, args.batch_size, cache)
     metric = MetricSettings(args.bootstrap, args.ci_level, args.kid_subset_size, args.kid_subsets, args.seed)

@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 
 from ..errors import InputError
+from . import add_overwrite_option
 
 
 def register(sub) -> None:
@@ -16,14 +17,17 @@ def register(sub) -> None:
     train.add_argument("--n", type=int, help=f"training scenes (default {DEFAULTS['n']})")
     train.add_argument("--held-out", type=int,
                        help=f"held-out scenes for the model card (default {DEFAULTS['held_out']})")
-    train.add_argument("--seed", type=int)
-    train.add_argument("--space", default="isu-paper")
+    train.add_argument("--seed", type=int,
+                       help=f"seed of the training and held-out scenes (default {DEFAULTS['seed']})")
+    train.add_argument("--space", default="isu-paper",
+                       help="scene space name or .toml path whose features the heads answer (default isu-paper)")
     train.add_argument("--preset", help="render preset (default draft, as the demo renders)")
     train.add_argument("--check-preset", action="append", default=[], metavar="PRESET[:N]",
                        help="also render the first N held-out scenes (default all) at PRESET and report the "
                             "accuracy on them, e.g. standard:100 (repeatable)")
-    train.add_argument("--camera")
-    train.add_argument("--cabin")
+    train.add_argument("--camera", help=f"camera rig name or .toml path the scenes are rendered through "
+                                        f"(default {DEFAULTS['camera']})")
+    train.add_argument("--cabin", help=f"cabin rig name or .toml path (default {DEFAULTS['cabin']})")
     train.add_argument("--extra", nargs="+", type=Path, metavar="DATASET",
                        help="retrain on the --base model's own training scenes (its stored features: nothing is "
                             "rendered again) plus these datasets (`isu-validate dataset`); the card compares every "
@@ -34,14 +38,15 @@ def register(sub) -> None:
     train.add_argument("--out", type=Path,
                        help="model folder (default WORKDIR/model, with --extra WORKDIR/model-extra; the shipped "
                             "model is replaced only when named here: --out data/reference-isu)")
+    add_overwrite_option(train, "another model or another command's output")
     train.add_argument("--workdir", type=Path, default=Path("runs/reference-training"),
                        help="where the rendered sets (with --extra: the datasets' features) go; an interrupted "
-                            "training resumes from here")
+                            "training resumes from here (default runs/reference-training)")
     train.set_defaults(func=cmd_train)
     parser.set_defaults(func=lambda args: parser.print_help() or 2)
 
 
-DEFAULTS = {"n": 800, "held_out": 200, "seed": 0, "preset": "draft", "camera": "default", "cabin": "default"}
+DEFAULTS = {"n": 600, "held_out": 200, "seed": 0, "preset": "draft", "camera": "default", "cabin": "default"}
 FROM_SCRATCH = ("n", "held_out", "seed", "preset", "check_preset", "camera", "cabin")
 
 
@@ -67,6 +72,7 @@ def cmd_train_new(args) -> int:
     space = load_space(args.space)
     out = args.out or args.workdir / "model"  # never the shipped model unless asked for by name
     checks = dict(parse_check(spec, args.held_out) for spec in args.check_preset)
+    output = _claim(args, out, {"space": space.hash, **{k: getattr(args, k) for k in FROM_SCRATCH}})
 
     def renderer_for(preset: str):
         return open_renderer(preset=preset, camera=args.camera, cabin=args.cabin, space=space,
@@ -78,6 +84,7 @@ def cmd_train_new(args) -> int:
                                other_presets=checks, renderer_for=renderer_for, renderer_version=RENDERER_VERSION)
     finally:
         renderer.close()
+    output.mark()   # the model is written last, so a refused or failed training leaves no folder behind
     print(json.dumps(card["held_out"]["per_feature"], indent=2))
     _print_written(out, default_model_dir())
     return 0
@@ -98,15 +105,43 @@ def cmd_retrain(args) -> int:
                          f"{', '.join(given)} do not apply (train a new base without --extra)")
     space = load_space(args.space)
     out = args.out or args.workdir / "model-extra"
+    base = _check_base(args.base) if args.base else default_model_dir()
+    output = _claim(args, out, {"space": space.hash, "base": str(Path(base).resolve()),
+                                "extra": [str(Path(f).resolve()) for f in args.extra]})
     extra = []
     for folder in args.extra:
         dataset = open_dataset(folder)
         extra.append(extra_set(folder, dataset.info(), dataset.metadata(), space))
-    card = retrain_with_extra(space, args.base or default_model_dir(), extra, out, RENDERER_VERSION,
+    card = retrain_with_extra(space, base, extra, out, RENDERER_VERSION,
                               cache_dir=args.workdir / "extra-features")
+    output.mark()
     print((out / "MODEL_CARD.md").read_text())
     _print_written(out, default_model_dir())
     return 0 if card else 1
+
+
+def _check_base(base: Path) -> Path:
+    """``--base`` as a model folder, or an error that says what the path really is."""
+    from ..archive.output_dir import holder
+    from ..reference.model import default_model_dir
+
+    fix = f"name a model folder (one with heads.npz, e.g. {default_model_dir()} or a `reference train --out`)"
+    if not base.exists():
+        raise InputError(f"--base {base} does not exist; {fix}")
+    if not base.is_dir():
+        raise InputError(f"--base {base} is a file; {fix}")
+    if not (base / "heads.npz").is_file():
+        found = holder(base)
+        what = (f"holds the output of `isu-validate {found.command}` ({found.evidence})" if found
+                else "holds no heads.npz")
+        raise InputError(f"--base {base} {what}, not a reference ISU model; {fix}")
+    return base
+
+
+def _claim(args, out: Path, settings: dict):
+    """The model folder: new, or this same training's; another model or command's output needs --overwrite."""
+    from ..archive.output_dir import claim_output
+    return claim_output(out, "reference train", settings, overwrite=args.overwrite)
 
 
 def _print_written(out: Path, shipped: Path) -> None:

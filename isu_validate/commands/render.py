@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 
 from ..errors import UserError
+from . import add_overwrite_option
 
 
 def register(sub) -> None:
@@ -34,6 +35,7 @@ def register(sub) -> None:
     p.add_argument("--cache", type=Path, help="render cache folder (a scene seen before costs nothing)")
     p.add_argument("--log", type=Path, help="folder for Blender's console log (default: <out folder>/logs)")
     p.add_argument("--timeout", type=float, default=240.0, help="seconds per render before the worker is killed")
+    add_overwrite_option(p, "another command's output (--random)")
     p.add_argument("--sheet-tile", type=int, default=320, metavar="PX",
                    help="width of each frame on the contact sheet of --random (default 320)")
     p.set_defaults(func=run)
@@ -51,7 +53,11 @@ def run(args) -> int:
         raise UserError("give either a SCENE.json or --random N")
     space = load_space(args.space)
     if args.random is not None:
+        from ..archive.output_dir import claim_output
         folder = args.out
+        claim_output(folder, "render", {"random": args.random, "seed": args.seed, "preset": args.preset,
+                                        "rig": args.rig, "cabin": args.cabin, "space": space.hash},
+                     overwrite=args.overwrite).mark()
         scenes = [(f"scene-{i:04d}", s)
                   for i, s in enumerate(space.sample(np.random.default_rng(args.seed), args.random))]
         targets = [(folder / f"{name}.png", scene) for name, scene in scenes]

@@ -18,6 +18,7 @@ from pathlib import Path
 
 from ..analysis.html import threshold_label
 from ..config import DEFAULT_SUT_ERROR_LIMIT
+from . import add_overwrite_option
 from .sut import parse_options
 
 
@@ -36,7 +37,9 @@ def register(sub) -> None:
     p.add_argument("--stop-after-sut-errors", type=int, default=DEFAULT_SUT_ERROR_LIMIT, metavar="N",
                    help=f"stop after N SUT errors in a row with no answer in between (default "
                         f"{DEFAULT_SUT_ERROR_LIMIT}; 0 never stops)")
-    p.add_argument("--out", type=Path, required=True, help="replay folder")
+    p.add_argument("--out", type=Path, required=True,
+                   help="replay folder: new, or this same replay's (it goes on where it stopped)")
+    add_overwrite_option(p, "a folder that holds another replay or another command's output")
     p.set_defaults(func=run)
 
 
@@ -48,7 +51,7 @@ def run(args) -> int:
     settings = ReplaySettings(sut=args.sut, sut_options=parse_options(args.sut_option), threshold=args.threshold,
                               repeats=args.repeats, sut_timeout_s=args.sut_timeout,
                               stop_after_sut_errors=args.stop_after_sut_errors)
-    result = replay_run(args.run, args.out, settings)
+    result = replay_run(args.run, args.out, settings, overwrite=args.overwrite)
     print(_lines(result.summary, args.out))
     if result.exit_code:
         why = result.summary["stopped"] or "nothing could be replayed (see the problems above)"
@@ -65,7 +68,8 @@ def _lines(s: dict, out: Path) -> str:
     rates = ", ".join(f"{threshold_label(r['threshold'])}: {_pct(r['rate_before'])} -> {_pct(r['rate_after'])}"
                       for r in s["rates"])
     lines = [f"replayed {s['n_replayed']} of {s['n_tests']} tests with a verdict in the run "
-             f"against {s['settings']['sut']} (the run's SUT: {s['settings']['run_sut']})",
+             f"against {s['settings']['sut_version']['label']} (the run's SUT: {s['settings']['run_sut']}"
+             + "".join(f", {k}={v}" for k, v in sorted(s['settings']['run_sut_options'].items())) + ")",
              f"at threshold {threshold_label(s['threshold'])}: fixed {s['fixed']}, new {s['new']}, "
              f"persisting {s['persisting']}, still passing {s['still_passing']} "
              f"(failures {s['failures_before']} -> {s['failures_after']}); "

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from . import add_overwrite_option
+
 
 def register(sub) -> None:
     p = sub.add_parser("report", help="compare runs: failure rates, statistics, failure analysis and diversity",
@@ -20,6 +22,7 @@ def register(sub) -> None:
                    help="k for k-means (default 10; lowered when there are fewer distinct failures)")
     p.add_argument("--gallery", type=int, default=None, metavar="N", help="failing scenes shown (default 60)")
     p.add_argument("--seed", type=int, default=0, help="seed for k-means")
+    add_overwrite_option(p, "a report of other runs or settings, or another command's output (a run)")
     p.set_defaults(func=cmd_report)
 
 
@@ -27,6 +30,26 @@ def cmd_report(args) -> int:
     from ..analysis import report
 
     path = report(args.runs, args.out, embedding=args.embedding, clusters=args.clusters, gallery=args.gallery,
-                  seed=args.seed)
+                  seed=args.seed, overwrite=args.overwrite)
     print(f"report: {path}")
+    for line in region_lines(path.parent / "report.json"):
+        print(line)
     return 0
+
+
+def region_lines(report_json: Path) -> list[str]:
+    """The failure regions of every SUT and mode, as the report's "Failure regions" tables hold them (the
+    rules `dataset --focus failing` draws near)."""
+    import json
+
+    tables = json.loads(report_json.read_text())["tables"]
+    lines = []
+    for name, rules in sorted(tables.items()):
+        if not name.startswith("regions"):
+            continue
+        group = name[len("regions_"):].replace("_", " ") if name != "regions" else ""
+        lines.append(f"failure regions{' of ' + group if group else ''} (decision-tree rules where most tests fail):"
+                     + ("" if rules else " none"))
+        lines += [f"  {r['rule']}: {r['failing']} of {r['tests']} tests failing, "
+                  f"{100 * r['share_of_failures']:.1f}% of the failures" for r in rules]
+    return lines

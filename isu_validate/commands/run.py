@@ -206,7 +206,10 @@ def cmd_run(args) -> int:
     except ResumeMismatch as exc:
         print(f"isu-validate run: error: {_mismatch_message(exc)}", file=sys.stderr)
         return 2
-    except (RunError, ConnectionError) as exc:
+    except RunError as exc:
+        print(f"isu-validate run: error: {exc.on_command_line()}", file=sys.stderr)
+        return 2
+    except ConnectionError as exc:
         print(f"isu-validate run: error: {exc}", file=sys.stderr)
         return 2
     print(f"{summary.tests} tests ({summary.evaluated_now} evaluated now), {summary.failures} failing, "

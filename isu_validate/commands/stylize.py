@@ -28,6 +28,8 @@ from isu_validate.errors import InputError
 from isu_validate.image_files import expand_images
 from isu_validate.pairs import PairsDir
 
+from . import add_overwrite_option
+
 
 PAIR_STYLES = 12  # style photos taken from a pairs directory by default
 
@@ -51,6 +53,7 @@ def register(sub) -> None:
     p.add_argument("--resume", action="store_true",
                    help="keep every output that exists, even one made with other settings (the same settings "
                         "are skipped anyway)")
+    add_overwrite_option(p, "images styled with other settings, or another command's output")
     p.add_argument("--style-distance", type=int, default=8, metavar="N",
                    help="measure the style distance of render and output on N images spread over the set "
                         "(default 8; two VGG passes each; 0: none)")
@@ -100,6 +103,10 @@ def run(args) -> int:
     method = args.method or ("fast" if args.pairs else "gatys")
     styles = _styles(args, method)
     stylise = _Gatys(args, styles) if method == "gatys" else _Fast(args, styles, [src for src, _ in jobs])
+    if not args.pairs:   # --pairs writes nst.png into the pairs directory named; --out is claimed
+        from isu_validate.archive.output_dir import claim_output
+        claim_output(args.out, "stylize", {"images": [str(src.resolve()) for src, _ in jobs], "settings": stylise.key},
+                     resume=args.resume, overwrite=args.overwrite).mark()
     report = PairsDir(args.pairs).nst_report if args.pairs else (args.out / "stylize.json")
     earlier = _earlier(report, stylise.key)
     records, skipped = _style_all(args, jobs, stylise, styles, report, earlier)
@@ -189,7 +196,6 @@ def _jobs(args) -> list[tuple[Path, Path]]:
     if clash:
         raise InputError(f"several inputs share the name(s) {', '.join(clash)}; their outputs would overwrite "
                          "each other in --out: stylise those folders separately")
-    args.out.mkdir(parents=True, exist_ok=True)
     return [(p, args.out / f"{p.stem}.png") for p in sources]
 
 

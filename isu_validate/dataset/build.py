@@ -17,6 +17,7 @@ from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Callable
 
+from ..archive.output_dir import claim_output, is_empty
 from ..execution import make_executor, render_threads
 from ..progress import Progress
 from ..space import SceneSpace, load_space
@@ -64,9 +65,10 @@ def build_dataset(settings: DatasetSettings, out: str | Path, resume: bool = Fal
     _check_rendering(settings)
     styles = plan_styles(settings.styles, settings.style_models, settings.style_size, settings.style_steps)
     settings = replace(settings, inputs=_inputs(runs, styles))
+    output = claim_output(folder.path, "dataset", settings.identity(), resume=resume, overwrite=None)
     info = _resume_info(folder, settings) if resume else _new_info(folder, settings, space, styles)
     plan = Plan(space, settings, runs)
-    info["focus"] = _focus_info(settings, plan)
+    info["focus"] = _focus_info(settings, plan, runs)
     config = ImageConfig(str(folder.path), settings.space, settings.preset, settings.camera, settings.extrinsics_from,
                          settings.cabin, render_threads(settings.workers), tuple(styles), settings.seed,
                          settings.renderer_factory)
@@ -75,8 +77,9 @@ def build_dataset(settings: DatasetSettings, out: str | Path, resume: bool = Fal
     if _usable(entries) < settings.n and len(entries) < plan.limit:   # else: a complete dataset, written again
         executor = make_executor(config, settings.workers, settings.cluster, task=IMAGES)   # checks the renderer
         try:
+            output.mark()
             if not resume:
-                folder.write_info(info)   # the first file: from here on the folder is this dataset
+                folder.write_info(info)   # from here on the folder is this dataset
             made_now = _render_slots(folder, plan, settings.n, entries, executor, log, progress_stream)
         finally:
             executor.close()
@@ -106,8 +109,9 @@ def _new_info(folder: DatasetDir, settings: DatasetSettings, space: SceneSpace, 
     from ..render import get_preset, load_cabin
 
     if folder.is_dataset():
-        raise DatasetError(f"{folder.path} already holds a dataset; continue it with --resume, or choose another --out")
-    if folder.path.exists() and (not folder.path.is_dir() or any(folder.path.iterdir())):
+        raise DatasetError.naming(f"{folder.path} already holds a dataset; continue it with {{resume}}, or choose "
+                                  "another folder for {out}")
+    if not is_empty(folder.path):
         raise DatasetError(f"{folder.path} exists and is not an empty folder; choose a new folder for --out")
     preset = get_preset(settings.preset) if isinstance(settings.preset, str) else settings.preset
     environment = load_cabin(settings.cabin).get("lighting", {}).get("environment", "?")
@@ -121,20 +125,26 @@ def _new_info(folder: DatasetDir, settings: DatasetSettings, space: SceneSpace, 
 
 def _resume_info(folder: DatasetDir, settings: DatasetSettings) -> dict:
     if not folder.is_dataset():
-        raise DatasetError(f"no dataset to resume in {folder.path} (no dataset.json); start one without --resume")
+        raise DatasetError.naming(f"no dataset to resume in {folder.path} (no dataset.json); start one without "
+                                  "{resume}")
     info = folder.info()
     diffs = differences(info.get("identity", {}), settings.identity())
     if diffs:
-        raise DatasetError(f"{folder.path} was started with other settings; resume with the same ones (or choose "
-                           f"another --out): " + "; ".join(diffs))
+        raise DatasetError.naming(f"{folder.path} was started with other settings; resume with the same ones (or "
+                                  "choose another folder for {out}): " + "; ".join(diffs))
     info["settings"] = settings.to_dict()   # workers and cluster may change
     return info
 
 
-def _focus_info(settings: DatasetSettings, plan: Plan) -> dict | None:
+def _focus_info(settings: DatasetSettings, plan: Plan, runs) -> dict | None:
+    """The focus, with what defined a failing test: each run's SUT (and options) and oracle threshold."""
     if settings.focus is None:
         return None
-    return {"mode": settings.focus, "runs": list(settings.from_runs), "regions": [r.to_dict() for r in plan.regions]}
+    judged_by = [{"run": str(r.path.resolve()), "sut": r.sut, "sut_options": r.pipeline.get("sut_options") or {},
+                  "threshold": r.oracle_threshold, "tests": len(r.valid),
+                  "failing": sum(bool(t.failed) for t in r.valid)} for r in runs]
+    return {"mode": settings.focus, "runs": list(settings.from_runs), "judged_by": judged_by,
+            "regions": [r.to_dict() for r in plan.regions]}
 
 
 def _usable(entries: dict[int, dict]) -> int:
@@ -179,6 +189,7 @@ def _finish(folder: DatasetDir, space: SceneSpace, settings: DatasetSettings, in
                 counts={"images": len(ok) + copies, "renders": len(ok), "style_copies": copies,
                         "skipped": len(skipped), "short": short, **counts(space, ok)},
                 skipped=skipped, costs=costs(ok, seconds, made_now) if made_now else info.get("costs"),
+                image_size=sorted({f"{e['width']}x{e['height']}" for e in ok}),
                 reproduce=reproduce(settings, str(folder.path)))
     _sweep(folder, ok)
     write_outputs(folder, space, ok, info, settings.prompt_style)

@@ -9,6 +9,7 @@ from statistics import mean
 
 from ..space import SceneSpace
 from .settings import DatasetSettings
+from .vqa import OCCLUDED_RULE
 
 LICENCES = [
     {"what": "the renders (images, masks, labels)",
@@ -136,14 +137,21 @@ def card_markdown(info: dict) -> str:
              f"; {c['skipped']} frame(s) skipped as unusable (later scenes replaced them)"
              + (f"; {c['short']} fewer than the {s['n']} asked (too many unusable frames)" if c.get("short") else ""),
              f"- scenes: {_how_drawn(info)}; seed {s['seed']}",
+             f"- image size: {', '.join(info.get('image_size') or ['?'])} px (width x height)",
+             f"- render cost: {_cost(info.get('costs') or {})}",
+             f"- VQA rows: {OCCLUDED_RULE}",
              "- files: `images/`, `metadata.jsonl` (one row per image: `file_name`, `scene`, `truth`, `occluded`, "
              "`visibility`, `variant`, `source`, `region`), `annotations.json` (COCO, RLE masks), `vqa.jsonl` "
              "(chat messages; the last is the expected JSON answer), `dataset.json`", "",
              "Load it with `datasets.load_dataset(\"imagefolder\", data_dir=DIR)`, "
              "`pycocotools.coco.COCO(\"DIR/annotations.json\")`, or `isu-validate reference train --extra DIR`.", ""]
     if info.get("focus"):
-        lines += ["## Focus regions", "", "| region | tests of the runs | focused tests | drawn | scenes |",
-                  "|---|---|---|---|---|"]
+        lines += ["## Focus regions", "", _judged_by(info["focus"]), "",
+                  "Columns: *tests of the runs*, the runs' tests with a verdict inside the region's rule; *focused "
+                  "tests*, of those the ones the focus is on (failing ones for `failing`, passing ones for "
+                  "`passing`): the anchors new scenes are drawn near; *drawn*, how (near the focused tests, or "
+                  "uniformly inside the rule when it holds none); *scenes*, this dataset's renders from the region.",
+                  "", "| region | tests of the runs | focused tests | drawn | scenes |", "|---|---|---|---|---|"]
         lines += [f"| `{r['region']}` | {r['tests']} | {r['focused']} | {r['drawn']} | {r['scenes']} |"
                   for r in info["focus"]["regions"]]
         lines.append("")
@@ -164,9 +172,29 @@ def card_markdown(info: dict) -> str:
     lines += ["", "## Reproduce", "", f"    {info['reproduce']}", "",
               "## Limits", "", "- Rendered scenes of a procedural cabin: a real car's cabin, camera and people differ; "
               "style copies move the look, not the content.",
-              "- `truth` is what the scene space says; a feature listed in `occluded` may not be readable in the "
-              "frame.", ""]
+              "- `truth` in `metadata.jsonl` is what the scene space says; a feature listed in `occluded` may not be "
+              "readable in the frame (and is not asked in `vqa.jsonl`).", ""]
     return "\n".join(lines)
+
+
+def _cost(costs: dict) -> str:
+    if not costs.get("render_s_per_image"):
+        return "not measured"
+    last = costs.get("last_session") or {}
+    return (f"{costs['render_s_per_image']} s per render" +
+            (f", {costs['cpu_s_per_image']} CPU-s per image" if costs.get("cpu_s_per_image") else "") +
+            (f"; the last session made {last['renders']} renders at {last['renders_per_s']} renders/s"
+             if last.get("renders_per_s") else ""))
+
+
+def _judged_by(focus: dict) -> str:
+    """What "failing" meant: a test failed when its score fell below its run's oracle threshold, judged
+    against that run's SUT."""
+    runs = [f"`{r['run']}` (SUT `{r['sut']}`" + "".join(f", {k}={v}" for k, v in sorted(r["sut_options"].items()))
+            + f", threshold {r['threshold']}: {r['failing']} of {r['tests']} tests failing)"
+            for r in focus.get("judged_by", [])]
+    return ("A test of a run is failing when its score (F_qa, or F_emb for captions) is below the run's oracle "
+            "threshold, as the run judged it: " + ("; ".join(runs) or "runs not recorded") + ".")
 
 
 def _how_drawn(info: dict) -> str:

@@ -8,9 +8,11 @@ datasets: ``messages`` with typed content, the image placeholder ``{"type": "ima
      "messages": [{"role": "user", "content": [{"type": "text", "text": PROMPT}, {"type": "image"}]},
                   {"role": "assistant", "content": [{"type": "text", "text": ANSWER_JSON}]}]}
 
-The prompt is ``sut.build_request``'s for the scene (text before image, as the OpenAI-compatible adapter
-sends it); the answer holds the true answer of every question asked, in the prompt's key order, so the
-VQA judge scores it 1.0 (features in ``occluded`` are not judged; their true answer is still given).
+The prompt is ``sut.vqa_prompt``'s, worded as ``build_request`` words it for the SUT (text before image, as
+the OpenAI-compatible adapter sends it), over the scene's questions less those about features the frame hides
+(``occluded``): the prompt offers no "not visible" answer, so a row never teaches a model to answer what it
+cannot see. The answer holds the true answer of every question asked, in the prompt's key order, so the VQA
+judge scores it 1.0. ``metadata.jsonl`` keeps every truth, occluded ones marked.
 """
 from __future__ import annotations
 
@@ -18,12 +20,19 @@ import json
 from typing import Sequence
 
 from ..space import SceneSpace
-from ..sut import build_request
+from ..sut import vqa_prompt
+
+# what the card says about occluded features (one home: the row and the card agree)
+OCCLUDED_RULE = ("features the frame hides (`occluded`) are left out of that row's questions and answer in "
+                 "`vqa.jsonl`: the prompt offers no \"not visible\" answer, so a model fine-tuned on it is never "
+                 "taught to answer what it cannot see; `metadata.jsonl` keeps their truth, marked `occluded`")
 
 
 def vqa_row(space: SceneSpace, scene: dict, file_name: str, occluded: Sequence[str], prompt_style: str) -> dict:
-    request = build_request(space, scene, file_name, "vqa", style=prompt_style)
-    answer = json.dumps({q.key: q.truth for q in request.questions})
+    hidden = set(occluded)
+    questions = [q for q in space.questions(scene) if q.key not in hidden]
+    answer = json.dumps({q.key: q.truth for q in questions})
+    prompt = vqa_prompt(space, questions, style=prompt_style)
     return {"file_name": file_name, "images": [file_name], "occluded": list(occluded),
-            "messages": [{"role": "user", "content": [{"type": "text", "text": request.prompt}, {"type": "image"}]},
+            "messages": [{"role": "user", "content": [{"type": "text", "text": prompt}, {"type": "image"}]},
                          {"role": "assistant", "content": [{"type": "text", "text": answer}]}]}

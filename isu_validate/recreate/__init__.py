@@ -17,6 +17,7 @@ from typing import Callable
 
 from ..analysis.runs import Run, load_run, name_uniquely
 from ..archive import find_runs
+from ..archive.output_dir import claim_output, is_empty
 from ..pairs import PairsDir, PairsError, Sample
 from ..protocols import RenderError
 from ..space import SceneSpace, SpaceError, load_space
@@ -61,9 +62,12 @@ def plan_recreation(runs: list[str | os.PathLike], mode: str, n: int, seed: int,
     """
     _check_preset(sheet_preset)
     pairs = PairsDir(out)
-    if pairs.root.exists() and any(pairs.root.iterdir()):
-        raise PairsError(f"{pairs.root} is not empty; recreate writes a new pairs directory (choose another --out, "
-                         "so no captured frame is ever overwritten)")
+    # another command's output is named; any other content (an earlier recreate, captured frames) is "not empty"
+    output = claim_output(pairs.root, "recreate", {"runs": [str(Path(r).resolve()) for r in runs], "mode": mode,
+                                                   "n": n, "seed": seed}, resume=True, overwrite=None)
+    if not is_empty(pairs.root):
+        raise PairsError.naming(f"{pairs.root} is not empty; recreate writes a new pairs directory (choose another "
+                                "folder for {out}, so no captured frame is ever overwritten)")
     loaded = name_uniquely([load_run(p) for p in find_runs(list(runs))])
     space = _space(loaded)
     chosen = select(loaded, mode, n, seed, failing_share)
@@ -78,6 +82,7 @@ def plan_recreation(runs: list[str | os.PathLike], mode: str, n: int, seed: int,
     plan.notes += [f"effort file {model.source} names features this space does not have: {', '.join(model.unused)}"
                    ] if model.unused else []
     pictures = Pictures(sheet_preset, open_renderer)
+    output.mark()
     try:
         _write(pairs, space, model, cabin_rig, [chosen.chosen[i] for i in order], plan, pictures)
     finally:

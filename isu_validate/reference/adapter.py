@@ -27,6 +27,7 @@ class ReferenceAdapter:
         self.id = "reference"
         heads = hashlib.sha1((model_dir / "heads.npz").read_bytes()).hexdigest()[:12]
         self.fingerprint = fingerprint("reference", self.id, {"heads": heads})
+        self.model_version = f"model {model_dir.resolve()}, heads {heads}"   # what a replay names
 
     def send(self, request: SUTRequest) -> Exchange:
         start = time.perf_counter()

@@ -7,6 +7,8 @@ is not there.
 """
 from __future__ import annotations
 
+import hashlib
+import json
 from pathlib import Path
 from typing import Iterable
 
@@ -36,4 +38,23 @@ def extra_set(folder: Path, info: dict, rows: Iterable[dict], space, variants: I
         images.append(image)
     if not images:
         raise InputError(f"dataset {folder} has no images" + (f" of variant {sorted(wanted)}" if wanted else ""))
-    return ExtraSet(str(folder), images, scenes, meta, left_out)
+    return ExtraSet(str(folder.resolve()), images, scenes, meta, left_out, content_hash(images, scenes),
+                    source_runs(info))
+
+
+def content_hash(images: list[Path], scenes: list[dict]) -> str:
+    """What the retrain learned from: every image's bytes and its labels (16 hex digits)."""
+    digest = hashlib.sha256()
+    for image, scene in zip(images, scenes):
+        digest.update(Path(image).read_bytes())
+        digest.update(json.dumps(scene, sort_keys=True).encode())
+    return digest.hexdigest()[:16]
+
+
+def source_runs(info: dict) -> list[dict]:
+    """The runs a focused dataset was drawn near, with the SUT and threshold that made their tests fail."""
+    focus = info.get("focus") or {}
+    judged = focus.get("judged_by")
+    if judged:
+        return [{k: r.get(k) for k in ("run", "sut", "sut_options", "threshold")} for r in judged]
+    return [{"run": run} for run in focus.get("runs", [])]

@@ -29,6 +29,8 @@ class ExtraSet:
     scenes: list[dict]           # canonical scenes, without the features the frame hides
     meta: dict = field(default_factory=dict)   # space, space_hash, renderer: what the images were made with
     left_out: int = 0            # labels left out: features the frames hide
+    content_hash: str = ""       # the images and their labels (``extra_data.content_hash``)
+    runs: list[dict] = field(default_factory=list)   # a focused dataset's runs: run, sut, threshold
 
 
 def retrain_with_extra(space, base: Path, extra: list[ExtraSet], out: Path, renderer_version: str,
@@ -52,9 +54,10 @@ def retrain_with_extra(space, base: Path, extra: list[ExtraSet], out: Path, rend
     heads, card = fit_and_describe(space, combined, held_out, train.meta["seed"])
     base_heads, _ = load_heads(Path(base))
     before = accuracy(space, base_heads, held_out.features, held_out.scenes)["per_feature"]
-    card.update(renderer=train.meta["renderer"], base=str(base), base_training_scenes=len(train.scenes),
-                extra=[{"dataset": part.source, "images": len(part.images),
-                        "labels_left_out": part.left_out} for part in extra],
+    card.update(renderer=train.meta["renderer"], base=str(Path(base).resolve()), base_training_scenes=len(train.scenes),
+                extra=[{"dataset": part.source, "content_hash": part.content_hash, "images": len(part.images),
+                        "labels_left_out": part.left_out, "runs": part.runs} for part in extra],
+                reproduce=reproduce(space, base, extra, out),
                 comparison=compare(before, card["held_out"]["per_feature"]),
                 embed_seconds=round(embedded - start, 1), fit_seconds=round(time.time() - embedded, 1))
     card["change"] = change_summary(card["comparison"])
@@ -91,23 +94,54 @@ def change_summary(comparison: dict) -> dict:
     return {"worst_feature": worst, "worst": changes[worst], "mean": float(np.mean(list(changes.values())))}
 
 
+def reproduce(space, base: Path, extra: list[ExtraSet], out: Path) -> str:
+    """The command that made this model, with absolute paths: it runs as printed, from any folder."""
+    import shlex
+    words = ["isu-validate", "reference", "train", "--extra", *(part.source for part in extra),
+             "--base", str(Path(base).resolve()), "--space", _space_spec(space), "--out", str(Path(out).resolve())]
+    return shlex.join(words)
+
+
+def _space_spec(space) -> str:
+    """The space as ``--space`` names it: its shipped name, else the file it came from."""
+    from ..space import SpaceError, load_space
+    try:
+        return space.name if load_space(space.name).hash == space.hash else space.source
+    except SpaceError:
+        return space.source
+
+
+def _points(change: float) -> str:
+    """An accuracy change in percentage points, as the README and ``bench augment`` speak of them."""
+    return f"{100 * change:+.1f} pt"
+
+
+def _runs(runs: list[dict]) -> str:
+    if not runs:
+        return "not focused on runs"
+    return "drawn near the tests of " + "; ".join(
+        f"`{r['run']}`" + (f" (SUT `{r['sut']}`, failing below threshold {r['threshold']})" if r.get("sut") else "")
+        for r in runs)
+
+
 def retrained_markdown(card: dict) -> str:
-    extra = " ".join(row["dataset"] for row in card["extra"])
     lines = ["# Reference ISU retrained with extra data", "",
              f"- Base: `{card['base']}`: {card['base_training_scenes']} training scenes, seed {card['seed']}, "
              f"render preset `{card['render_preset']}`, renderer `{card['renderer']}` (its stored features: "
              "nothing rendered again)",
-             *(f"- Extra: `{row['dataset']}`: {row['images']} images ({row['labels_left_out']} labels left out: "
-               "features their frames hide)" for row in card["extra"]),
+             *(f"- Extra: `{row['dataset']}` (content hash {row.get('content_hash', '?')}): {row['images']} images "
+               f"({row['labels_left_out']} labels left out: features their frames hide); {_runs(row.get('runs'))}"
+               for row in card["extra"]),
              f"- Held-out set: the base model's {card['held_out_scenes']} held-out scenes",
              f"- Backbone: {card['backbone']}, input {card['input_size'][0]}x{card['input_size'][1]}",
              f"- Cost: {card['embed_seconds']} s embedding the extra images, {card['fit_seconds']} s fitting",
-             f"- Reproduce: `isu-validate reference train --extra {extra} --base {card['base']} --out DIR`",
+             f"- Reproduce: `{card['reproduce']}`",
              "", "## Held-out accuracy against the base model (same scenes)", "",
              "| feature | base | retrained | change | n |", "|---|---|---|---|---|"]
     for name, row in card["comparison"].items():
-        lines.append(f"| {name} | {row['base']:.3f} | {row['retrained']:.3f} | {row['change']:+.3f} | {row['n']} |")
+        lines.append(f"| {name} | {100 * row['base']:.1f}% | {100 * row['retrained']:.1f}% | {_points(row['change'])} "
+                     f"| {row['n']} |")
     summary = card["change"]
-    lines += ["", f"Worst change {summary['worst']:+.3f} ({summary['worst_feature']}), "
-                  f"mean change {summary['mean']:+.3f}."]
+    lines += ["", f"Worst change {_points(summary['worst'])} ({summary['worst_feature']}), "
+                  f"mean change {_points(summary['mean'])} (percentage points of held-out accuracy)."]
     return "\n".join(lines) + "\n"

@@ -20,10 +20,12 @@ import sys
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
+from ..archive.output_dir import claim_output
 from ..atomic import atomic_open, write_text
 from ..config import DEFAULT_SUT_ERROR_LIMIT
 from ..errors import InputError
 from ..progress import Progress
+from ..sut.version import sut_version
 from .compare import CSV_COLUMNS, Replayed, rows, summarise
 from .stored import StoredRun, read_run
 
@@ -83,9 +85,12 @@ class ReplayResult:
         return 0 if self.summary["n_replayed"] and not self.summary["stopped"] else 1
 
 
-def replay_run(run: str | os.PathLike, out: str | os.PathLike, settings: ReplaySettings, log=None) -> ReplayResult:
+def replay_run(run: str | os.PathLike, out: str | os.PathLike, settings: ReplaySettings, log=None,
+               overwrite: bool = False) -> ReplayResult:
     """Ask ``settings.sut`` about every test of ``run`` that had a verdict, judge as the run judged, and
     compare (``isu-validate replay``): writes ``out/summary.json``, ``replay.csv``, ``report.html``.
+    ``out`` must be new, or this replay's own folder (same run, SUT, model and settings: it goes on where it
+    stopped); another command's output or another replay is refused unless ``overwrite``.
 
         result = replay_run("runs/rs-s1", "replay/", ReplaySettings(sut="reference", threshold=0.8))
         print(result.fixed, result.new, result.persisting, result.still_passing, result.p)
@@ -107,6 +112,7 @@ def replay_run(run: str | os.PathLike, out: str | os.PathLike, settings: ReplayS
     try:
         from .coverage import check_covers
         check_covers(sut, settings.sut, stored.path, stored.space.name, stored.space_hash)
+        claim_output(out, "replay", _identity(stored, settings, sut), overwrite=overwrite).mark()
         from .frames import find_frames
         frames = find_frames(stored, out, problem)
         items, stopped = _replay(stored, sut, frames, threshold, settings.stop_after_sut_errors, problem)
@@ -120,6 +126,14 @@ def replay_run(run: str | os.PathLike, out: str | os.PathLike, settings: ReplayS
     from .report import write_report
     write_report(out / "report.html", summary, items, stored.space)
     return ReplayResult(summary, table, out)
+
+
+def _identity(stored: StoredRun, settings: ReplaySettings, sut) -> dict:
+    """What decides a replay folder's content (named as in summary.json's settings, so a folder from before
+    the marker is compared too): the run, the SUT's fingerprint (its model: the spec's spelling or the path to
+    the same model does not matter), the threshold and repeats."""
+    return {"run": str(stored.path), "sut_fingerprint": sut.adapter.fingerprint, "threshold": settings.threshold,
+            "repeats": sut.repeats}
 
 
 def _threshold(stored: StoredRun, given: float | None) -> float:
@@ -182,7 +196,8 @@ def _settings(stored: StoredRun, settings: ReplaySettings, sut) -> dict:
     pipeline = stored.pipeline
     return {**asdict(settings), "repeats": sut.repeats, "threshold_run": stored.threshold,
             "run": str(stored.path), "run_sut": pipeline.sut, "run_sut_options": pipeline.sut_options,
-            "sut_fingerprint": sut.adapter.fingerprint, "mode": "vqa", "space": stored.space.name,
+            "sut_fingerprint": sut.adapter.fingerprint, "sut_version": sut_version(settings.sut, sut.adapter),
+            "mode": "vqa", "space": stored.space.name,
             "space_hash": stored.space_hash, "prompt_style": pipeline.prompt_style}
 
 

@@ -23,10 +23,18 @@ def write_report(path: Path, summary: dict, items: list[Replayed], space) -> Non
                          "passed in the run, fail now"),
                 _gallery("Fixed failures", "fixed", [i for i in items if i.status(summary["threshold"]) == FIXED],
                          labels, "failed in the run, pass now"),
+                _gallery("Persisting failures", "persisting",
+                         [i for i in items if i.status(summary["threshold"]) == PERSISTING], labels,
+                         "failed in the run, fail now too"),
                 _problems(summary)]
-    subtitle = (f"run {s['run']} (SUT {s['run_sut']}) replayed against {s['sut']}, {s['repeats']} repeat(s); "
-                f"space {s['space']}; threshold {threshold_label(summary['threshold'])}")
-    write_text(path, page("Regression replay", subtitle, [STYLE] + [x for x in sections if x]))
+    version = s["sut_version"]["label"]
+    subtitle = (f"run {s['run']} (SUT {s['run_sut']}{_options(s['run_sut_options'])}) replayed against {version}, "
+                f"{s['repeats']} repeat(s); space {s['space']}; threshold {threshold_label(summary['threshold'])}")
+    write_text(path, page(f"Regression replay: {version}", subtitle, [STYLE] + [x for x in sections if x]))
+
+
+def _options(options: dict | None) -> str:
+    return "".join(f", {k}={v}" for k, v in sorted((options or {}).items()))
 
 
 def _pct(value) -> str:

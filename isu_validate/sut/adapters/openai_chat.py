@@ -65,6 +65,7 @@ class OpenAIChatAdapter:
         self.opts = opts
         self.id = f"openai:{self.model}@{self.base_url}"
         self.fingerprint = fingerprint("openai", self.id, {k: opts[k] for k in _ANSWER_OPTIONS})
+        self.model_version = f"model {self.model}"   # what a replay names
         self.redact = Redactor([self._key])
         self._json_ok = opts["json_mode"] != "off"
         self._lock = threading.Lock()
