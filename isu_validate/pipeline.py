@@ -71,7 +71,8 @@ def build_renderer(config: PipelineConfig, space: SceneSpace):
     return open_renderer(preset=config.preset, camera=config.camera, cabin=config.cabin,
                          channels=config.channels, cache_dir=run_dir / "cache" / "render",
                          log_dir=run_dir / "logs", space=space, threads=config.render_threads,
-                         extrinsics_from=config.extrinsics_from, min_visible=config.min_visible)
+                         extrinsics_from=config.extrinsics_from, min_visible=config.min_visible,
+                         device=config.render_device)
 
 
 def open_run_renderer(config: PipelineConfig, space: SceneSpace):

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from ..devices import add_device_argument, add_render_device_argument
 from ..errors import InputError
 
 
@@ -23,6 +24,8 @@ def register(sub) -> None:
                        help="also render the first N held-out scenes (default all) at PRESET and report the "
                             "accuracy on them, e.g. standard:100 (repeatable)")
     train.add_argument("--camera")
+    add_render_device_argument(train)
+    add_device_argument(train)
     train.add_argument("--cabin")
     train.add_argument("--extra", nargs="+", type=Path, metavar="DATASET",
                        help="retrain on the --base model's own training scenes (its stored features: nothing is "
@@ -70,7 +73,8 @@ def cmd_train_new(args) -> int:
 
     def renderer_for(preset: str):
         return open_renderer(preset=preset, camera=args.camera, cabin=args.cabin, space=space,
-                             cache_dir=args.workdir / "cache", log_dir=args.workdir / "logs")
+                             cache_dir=args.workdir / "cache", log_dir=args.workdir / "logs",
+                             device=args.render_device)
 
     renderer = renderer_for(args.preset)
     try:

@@ -36,6 +36,8 @@ class ImageConfig:
     styles: tuple[StyleSpec, ...] = ()
     style_seed: int = 0
     renderer_factory: str = ""   # module:function(space) -> renderer; empty: Blender
+    render_device: str = "auto"  # Cycles' compute device
+    device: str = "auto"         # the style transfer's torch device
 
 
 @dataclass(frozen=True)
@@ -126,7 +128,7 @@ def _renderer(config: ImageConfig, space):
     preset = (get_preset(config.preset, threads=config.threads) if isinstance(config.preset, str)
               else replace(config.preset, threads=config.threads))
     return open_renderer(preset, config.camera, config.cabin, ("seg",), None, Path(config.out) / LOGS_DIR,
-                         space=space, extrinsics_from=config.extrinsics_from)
+                         space=space, extrinsics_from=config.extrinsics_from, device=config.render_device)
 
 
 # ---- the Task: one ImageMaker per process and configuration, as pipeline.py keeps one Pipeline
