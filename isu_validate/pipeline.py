@@ -57,6 +57,7 @@ def build_components(config: PipelineConfig, space: SceneSpace) -> Components:
     run_dir = Path(config.run_dir)
     renderer = build_renderer(config, space)
     sut = open_sut(config.sut, space=space, repeats=config.repeats, cache_dir=run_dir / "cache" / "sut",
+                   device=config.device,
                    timeout_s=config.sut_timeout_s, **config.sut_options)
     options = {"template": config.caption_template} if config.mode == "vc" else {}
     judge = make_judge(config.mode, space, threshold=config.threshold, **options)

@@ -79,7 +79,8 @@ def cmd_train_new(args) -> int:
     renderer = renderer_for(args.preset)
     try:
         card = train_reference(space, renderer, out, args.workdir, args.n, args.held_out, args.seed, args.preset,
-                               other_presets=checks, renderer_for=renderer_for, renderer_version=RENDERER_VERSION)
+                               other_presets=checks, renderer_for=renderer_for, renderer_version=RENDERER_VERSION,
+                               device=args.device)
     finally:
         renderer.close()
     print(json.dumps(card["held_out"]["per_feature"], indent=2))
@@ -107,7 +108,7 @@ def cmd_retrain(args) -> int:
         dataset = open_dataset(folder)
         extra.append(extra_set(folder, dataset.info(), dataset.metadata(), space))
     card = retrain_with_extra(space, args.base or default_model_dir(), extra, out, RENDERER_VERSION,
-                              cache_dir=args.workdir / "extra-features")
+                              cache_dir=args.workdir / "extra-features", device=args.device)
     print((out / "MODEL_CARD.md").read_text())
     _print_written(out, default_model_dir())
     return 0 if card else 1
