@@ -3,6 +3,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..devices import add_device_argument
+
 
 def register(sub) -> None:
     p = sub.add_parser("report", help="compare runs: failure rates, statistics, failure analysis and diversity",
@@ -20,6 +22,7 @@ def register(sub) -> None:
                    help="k for k-means (default 10; lowered when there are fewer distinct failures)")
     p.add_argument("--gallery", type=int, default=None, metavar="N", help="failing scenes shown (default 60)")
     p.add_argument("--seed", type=int, default=0, help="seed for k-means")
+    add_device_argument(p)   # the image embedding's device
     p.set_defaults(func=cmd_report)
 
 
@@ -27,6 +30,6 @@ def cmd_report(args) -> int:
     from ..analysis import report
 
     path = report(args.runs, args.out, embedding=args.embedding, clusters=args.clusters, gallery=args.gallery,
-                  seed=args.seed)
+                  seed=args.seed, device=args.device)
     print(f"report: {path}")
     return 0
