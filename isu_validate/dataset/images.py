@@ -60,7 +60,7 @@ class ImageMaker:
         self.stylist = None
         if config.styles:
             from .styles import Stylist
-            self.stylist = Stylist(config.styles, config.threads or os.cpu_count() or 1)
+            self.stylist = Stylist(config.styles, config.threads or os.cpu_count() or 1, config.device)
 
     def make(self, job: SlotJob) -> dict:
         """The slot's manifest entry: ``status`` "ok" with its files, or "skipped" with the reason."""
