@@ -167,10 +167,7 @@ def _dig(d: dict, dotted: str):
 
 @contextlib.contextmanager
 def _posing(people: People):
-    """Count a miss; pose single-threaded (torch's two threads only fight on a shared machine). Posing stays on
-    the CPU whatever ``--device`` says: one body of a few thousand vertices, posed once and cached on disk as
-    vertex arrays; a GPU's start-up and copies would cost more than the work, and the cached vertices (part
-    of every render) stay the same on every desk."""
+    """Count a miss; pose single-threaded (torch's two threads only fight on a shared machine)."""
     import torch
     people.misses += 1
     threads = torch.get_num_threads()
