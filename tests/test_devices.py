@@ -141,3 +141,63 @@ def test_no_nvidia_smi_means_no_gpu(monkeypatch):
 
 def test_only_a_gpu_changes_the_render_cache_key():
     assert gpu.device_identity("cpu") == [] and gpu.device_identity("optix") == ["render-device:optix"]
+
+
+# ---- every torch user takes the one setting (CPU only: CUDA absent or faked, nothing runs on it)
+
+def test_inception_falls_back_names_the_device_and_keeps_the_cpus_cache(monkeypatch, tmp_path, capsys):
+    from isu_validate.realism.features import FeatureExtractor
+    _cuda(monkeypatch, 0)
+    fallen = FeatureExtractor(cache=tmp_path, device="cuda:1")
+    assert capsys.readouterr().err.startswith("warning: device cuda:1 is not available")
+    assert fallen.report_settings()["device"].startswith("cpu (asked cuda:1: torch sees no CUDA device")
+    cpu = FeatureExtractor(cache=tmp_path, device="cpu")
+    assert fallen.cache.folder == cpu.cache.folder and cpu.report_settings()["device"] == "cpu"
+    _cuda(monkeypatch, 1)   # a GPU's features are kept apart (how far they move was not measured)
+    on_gpu = FeatureExtractor(cache=tmp_path, device="auto")
+    assert on_gpu.device.name == "cuda:0" and on_gpu.cache.folder != cpu.cache.folder
+
+
+def test_the_reference_sut_takes_the_device_through_open_sut(monkeypatch, capsys):
+    from isu_validate.space import load_space
+    from isu_validate.sut import open_sut
+    _cuda(monkeypatch, 0)
+    sut = open_sut("reference", space=load_space("isu-paper"), device="cuda")
+    assert sut.adapter.device.startswith("cpu (asked cuda: ")
+    assert sut.adapter.model.backbone.device.is_cpu
+    assert capsys.readouterr().err.count("device cuda is not available") == 1
+
+
+def test_devices_are_how_a_run_works_not_what_it_measures():
+    from isu_validate.config import PipelineConfig, RunConfig
+    plain = RunConfig(PipelineConfig(run_dir="a")).identity()
+    assert RunConfig(PipelineConfig(run_dir="a", device="cuda", render_device="optix")).identity() == plain
+
+
+def test_run_carries_both_flags_into_the_pipeline(tmp_path):
+    from isu_validate.cli import build_parser
+    from isu_validate.commands.run import config_from_args
+    argv = ["run", "--out", str(tmp_path / "r"), "--device", "cuda:1", "--render-device", "optix"]
+    config = config_from_args(build_parser(argv).parse_args(argv))
+    assert (config.pipeline.device, config.pipeline.render_device) == ("cuda:1", "optix")
+
+
+@pytest.mark.parametrize("command", [["run", "--out", "x"], ["render", "s.json", "--out", "x.png"],
+                                     ["dataset", "--out", "x"], ["reference", "train"],
+                                     ["bench", "render"]])
+def test_every_rendering_command_has_the_render_device_flag(command):
+    from isu_validate.cli import build_parser
+    argv = [*command, "--render-device", "hip"]
+    assert build_parser(argv).parse_args(argv).render_device == "hip"
+
+
+@pytest.mark.parametrize("command", [["run", "--out", "x"], ["dataset", "--out", "x"], ["reference", "train"],
+                                     ["realism", "a", "b"], ["stylize", "a.png", "--out", "x"],
+                                     ["report", "r", "--out", "x"], ["agree", "p"],
+                                     ["replay", "r", "--sut", "reference", "--out", "x"],
+                                     ["sut", "check", "--sut", "reference", "i.png"],
+                                     ["bench", "fid"], ["bench", "nst"]])
+def test_every_torch_command_has_the_device_flag(command):
+    from isu_validate.cli import build_parser
+    argv = [*command, "--device", "cuda:2"]
+    assert build_parser(argv).parse_args(argv).device == "cuda:2"
