@@ -72,7 +72,7 @@ def test_the_commands_call_the_public_functions(tmp_path, monkeypatch):
     _record(monkeypatch, "isu_validate.analysis", "report", calls, result=tmp_path / "report.html")
     assert _command(["report", "runs/a", "runs/b", "--out", str(tmp_path), "--embedding", "scene"]) == 0
     assert calls[-1] == ("report", ([Path("runs/a"), Path("runs/b")], tmp_path),
-                         {"embedding": "scene", "clusters": None, "gallery": None, "seed": 0})
+                         {"embedding": "scene", "clusters": None, "gallery": None, "seed": 0, "device": "auto"})
     _record(monkeypatch, "isu_validate.recreate", "plan_recreation", calls)
     with pytest.raises(Called):
         _command(["recreate", "runs/a", "--n", "3", "--out", str(tmp_path / "pairs")])
