@@ -42,6 +42,8 @@ class PipelineConfig:
     sut_timeout_s: float = 60.0
     sut_options: dict = field(default_factory=dict)  # adapter options (never secrets: keys come from env)
     render_threads: int = 0           # Cycles threads per renderer (0 = all cores; split them across workers)
+    render_device: str = "auto"       # Cycles' compute device (devices.RENDER_DEVICES; render/gpu.py)
+    device: str = "auto"              # where torch work runs: the reference ISU, caption embeddings (devices.py)
     extrinsics_from: str | None = None  # camera rig whose cabin pose replaces the camera's own
     min_visible: dict = field(default_factory=dict)  # visibility thresholds {feature or "*": share} over the space's
     factory: str = "isu_validate.pipeline:build_components"
@@ -85,7 +87,8 @@ class RunConfig:
         for volatile in VOLATILE:
             data.pop(volatile)
         data["pipeline"].pop("run_dir")
-        data["pipeline"].pop("render_threads")  # how the work is spread, not what it computes
+        for how in ("render_threads", "render_device", "device"):   # how the work is done, not what it computes
+            data["pipeline"].pop(how)
         if not data["learn_from"]:
             data.pop("learn_from")  # runs started before --learn-from existed resume unchanged
         return json.loads(json.dumps(data))  # as stored in run.json (tuples become lists)

@@ -4,7 +4,11 @@
 its kernels differ enough that a user should choose it). A device that was asked for and is absent
 falls back to the CPU with one line on stderr, so a command written for a GPU desk still runs on a
 laptop; a spelling that names no device is a user error. What a result was computed on is named by
-``describe`` (reports and summaries carry it)."""
+``describe`` (reports and summaries carry it).
+
+Cycles has its own setting, ``--render-device auto|cpu|optix|cuda|hip|oneapi|metal``: only its spelling
+lives here; which devices Blender lists is asked inside the worker (``render/blender/device.py``) and
+what ``auto`` means is ``render/gpu.py``'s."""
 from __future__ import annotations
 
 import re
@@ -80,6 +84,26 @@ def _absent_reason(torch, text: str) -> str | None:
 
 def _warn(line: str) -> None:
     print(f"warning: {line}", file=sys.stderr)
+
+
+RENDER_DEVICES = ("auto", "cpu", "optix", "cuda", "hip", "oneapi", "metal")
+RENDER_DEVICE_HELP = ("Cycles' compute device: auto (the CPU unless an NVIDIA GPU this Blender has compiled "
+                      "kernels for is present), cpu, optix, cuda, hip, oneapi or metal; an absent device falls "
+                      "back to the CPU with one line (default auto)")
+
+
+def check_render_device(spec: str | None) -> str:
+    """A render-device spelling, lower case (argparse ``type=``)."""
+    text = (spec or "auto").strip().lower()
+    if text not in RENDER_DEVICES:
+        raise InputError(f"unknown render device {spec!r}: use one of {'|'.join(RENDER_DEVICES)}")
+    return text
+
+
+def add_render_device_argument(parser) -> None:
+    """The one ``--render-device`` flag of every command that renders with Cycles."""
+    parser.add_argument("--render-device", default="auto", type=check_render_device,
+                        metavar="|".join(RENDER_DEVICES), help=RENDER_DEVICE_HELP)
 
 
 def add_device_argument(parser) -> None:

@@ -57,6 +57,7 @@ def build_components(config: PipelineConfig, space: SceneSpace) -> Components:
     run_dir = Path(config.run_dir)
     renderer = build_renderer(config, space)
     sut = open_sut(config.sut, space=space, repeats=config.repeats, cache_dir=run_dir / "cache" / "sut",
+                   device=config.device,
                    timeout_s=config.sut_timeout_s, **config.sut_options)
     options = {"template": config.caption_template} if config.mode == "vc" else {}
     judge = make_judge(config.mode, space, threshold=config.threshold, **options)
@@ -71,7 +72,8 @@ def build_renderer(config: PipelineConfig, space: SceneSpace):
     return open_renderer(preset=config.preset, camera=config.camera, cabin=config.cabin,
                          channels=config.channels, cache_dir=run_dir / "cache" / "render",
                          log_dir=run_dir / "logs", space=space, threads=config.render_threads,
-                         extrinsics_from=config.extrinsics_from, min_visible=config.min_visible)
+                         extrinsics_from=config.extrinsics_from, min_visible=config.min_visible,
+                         device=config.render_device)
 
 
 def open_run_renderer(config: PipelineConfig, space: SceneSpace):

@@ -24,16 +24,17 @@ SIZE = 256  # the fast net's style size: coarser hides texture, finer costs VGG 
 
 class StyleDistance:
     def __init__(self, styles: Sequence[Path], size: int = SIZE, layers: Sequence[str] = STYLE_LAYERS,
-                 vgg: VGG19 | None = None):
+                 vgg: VGG19 | None = None, device: str = "cpu"):
         self.size, self.layers = size, tuple(layers)
-        self.vgg = vgg or VGG19("avg")
+        self.vgg = vgg or VGG19("avg").to(device)
         self.targets = load_style_grams(self.vgg, styles, size, self.layers)
 
     def __call__(self, image: Path | torch.Tensor) -> float:
         """Distance of an image file, or a (1, 3, H, W) 0..1 tensor already at the measuring size."""
         x = load_image(image, self.size) if isinstance(image, (str, Path)) else image
         with torch.no_grad():
-            return float(style_loss(self.vgg(preprocess(x), self.layers), self.targets, self.layers))
+            return float(style_loss(self.vgg(preprocess(x.to(self.vgg.device)), self.layers), self.targets,
+                                    self.layers))
 
     def settings(self) -> dict:
         return {"size": self.size, "layers": list(self.layers), "target": "mean Gram of the style set"}

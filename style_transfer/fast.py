@@ -83,13 +83,14 @@ class CropSampler:
 
 def train_fast(style_path: Path | Sequence[Path], content_paths: Sequence[Path], out: Path,
                cfg: FastTrainConfig = FastTrainConfig(), resume: bool = True,
-               progress: Callable[[int, int, float], None] | None = None) -> TrainReport:
+               progress: Callable[[int, int, float], None] | None = None, device: str = "cpu") -> TrainReport:
     """Train a network for ``style_path`` (one photo, or a style set: their mean Grams) on crops of
-    ``content_paths``; write it to ``out``."""
+    ``content_paths`` on ``device`` (a torch device name); write it to ``out``. The net starts from the
+    same seeded weights and sees the same crops on every device; the crops are drawn on the CPU."""
     styles = [Path(style_path)] if isinstance(style_path, (str, Path)) else [Path(p) for p in style_path]
     torch.manual_seed(cfg.seed)
-    vgg = VGG19(cfg.pooling)
-    net = FastStyleNet(cfg.net)
+    vgg = VGG19(cfg.pooling).to(device)
+    net = FastStyleNet(cfg.net).to(device)
     opt = torch.optim.Adam(net.parameters(), lr=cfg.lr)
     sampler = CropSampler(content_paths, cfg.crop, cfg.seed)
     style_grams = load_style_grams(vgg, styles, cfg.style_size, cfg.style_layers)
@@ -98,7 +99,7 @@ def train_fast(style_path: Path | Sequence[Path], content_paths: Sequence[Path],
     start = time.perf_counter()
     layers = set(cfg.content_layers) | set(cfg.style_layers)
     while step < cfg.steps:
-        batch = sampler.batch(cfg.batch_size)
+        batch = sampler.batch(cfg.batch_size).to(device)
         with torch.no_grad():
             targets = vgg(preprocess(batch), cfg.content_layers)
         styled = net(batch, seed=cfg.seed + step)  # fresh noise each step: the net learns its statistics
@@ -118,7 +119,7 @@ def train_fast(style_path: Path | Sequence[Path], content_paths: Sequence[Path],
             _atomic_save({"step": step, "losses": losses, "net": net.state_dict(), "opt": opt.state_dict(),
                           "rng": sampler.gen.get_state()}, ckpt)
     net.eval()
-    meta = {**_style_meta(styles), "content_images": len(content_paths),
+    meta = {**_style_meta(styles), "content_images": len(content_paths), "trained_on": str(device),
             "steps_done": step, "final_loss": losses[-1] if losses else None, "train": _plain(asdict(cfg))}
     save_model(net, out, meta)
     ckpt.unlink(missing_ok=True)
@@ -135,7 +136,7 @@ def _style_meta(styles: list[Path]) -> dict:
 
 
 def _resume(ckpt: Path, net, opt, sampler) -> tuple[int, list[float]]:
-    state = torch.load(ckpt, map_location="cpu", weights_only=True)
+    state = torch.load(ckpt, map_location="cpu", weights_only=True)   # loading copies onto the net's device
     net.load_state_dict(state["net"])
     opt.load_state_dict(state["opt"])
     sampler.gen.set_state(state["rng"])
@@ -176,6 +177,7 @@ def stylize_fast(net: FastStyleNet, image: torch.Tensor, seed: int = 0, size: in
     """One forward pass: (1, 3, H, W) 0..1 in and out; ``seed`` fixes the noise. With ``size`` the net runs
     at that longer side (the scale it was trained at) and its change, upsampled, is added to the image:
     the look changes as trained while the scene's fine detail passes through untouched."""
+    image = image.to(next(net.parameters()).device)   # where the net is (``net.to(device)``)
     with torch.inference_mode():
         if not size or max(image.shape[-2:]) <= size:
             return net(image, seed)

@@ -82,8 +82,10 @@ class FastStyleNet(nn.Module):
             h = layer(h, size)
         h = F.interpolate(h, size=x.shape[-2:], mode="nearest")
         if self.cfg.noise:
-            gen = torch.Generator(device=x.device).manual_seed(seed)
-            noise = torch.randn((x.shape[0], 1, *x.shape[-2:]), generator=gen, device=x.device, dtype=x.dtype)
+            # drawn on the CPU's generator and moved: a seed gives the same noise on every device (a CUDA
+            # generator's stream differs from the CPU's), so only float rounding separates their images
+            gen = torch.Generator().manual_seed(seed)
+            noise = torch.randn((x.shape[0], 1, *x.shape[-2:]), generator=gen, dtype=x.dtype).to(x.device)
             h = torch.cat([h, noise], dim=1)
         # A residual on the input: the scene's fine structure passes through untouched (what
         # the SUT must still recognise), and the untrained net starts at the identity, so a CPU

@@ -87,6 +87,7 @@ def stylize_gatys(content: torch.Tensor, style: Style, cfg: GatysConfig = GatysC
     a style set's images, or their mean Grams)."""
     cfg.check()
     vgg = vgg or VGG19(cfg.pooling)
+    content = content.to(vgg.device)   # the optimisation runs where the VGG is (``vgg.to(device)``)
     start = time.perf_counter()
     objective = GatysObjective(vgg, content, style, cfg)
     x = _initial(content, cfg).requires_grad_(True)
@@ -133,6 +134,6 @@ def _style_grams(vgg: VGG19, style: Style, layers: Sequence[str]) -> dict[str, t
 def _initial(content: torch.Tensor, cfg: GatysConfig) -> torch.Tensor:
     if cfg.init == "content":
         return content.clone()
-    gen = torch.Generator().manual_seed(cfg.seed)
-    return torch.rand(content.shape, generator=gen, dtype=content.dtype)
+    gen = torch.Generator().manual_seed(cfg.seed)   # the CPU's: the same start on every device
+    return torch.rand(content.shape, generator=gen, dtype=content.dtype).to(content.device)
 

@@ -61,20 +61,24 @@ class CachedModel:
 
 def fast_model_for(styles: Sequence[str | Path], renders: Sequence[Path], cfg: FastTrainConfig | None = None,
                    cache_dir: Path | None = None,
-                   progress: Callable[[int, int, float], None] | None = None) -> CachedModel:
+                   progress: Callable[[int, int, float], None] | None = None, device: str = "cpu") -> CachedModel:
     """The fast net for the style photos ``styles`` (files or folders): loaded when the cache holds one
     for the same photos and settings, otherwise trained on crops of ``renders`` (resuming a checkpoint
-    an interrupted training left) and stored. Style photos that cannot be read raise one-line InputErrors."""
+    an interrupted training left) and stored. Style photos that cannot be read raise one-line InputErrors.
+
+    The key holds no device: a net trained on a GPU is a net of the same settings (training is not bit
+    for bit reproducible anyway), and running it elsewhere only rounds floats differently; its meta says
+    where it was trained (``trained_on``). The net comes back on ``device``."""
     cfg = cfg or AUTO_TRAIN
     photos = style_paths(styles)
     path = Path(cache_dir or default_cache_dir()) / f"{model_key(photos, cfg)}.pt"
     if path.is_file():
         try:
             net, meta = load_model(path)
-            return CachedModel(net, meta, path, False, 0.0)
+            return CachedModel(net.to(device), meta, path, False, 0.0)
         except InputError:  # damaged (a disk fault; writes are atomic): a cache entry is only ever retrained
             path.unlink()
     start = time.perf_counter()
-    train_fast(photos, list(renders), path, cfg, resume=True, progress=progress)
+    train_fast(photos, list(renders), path, cfg, resume=True, progress=progress, device=device)
     net, meta = load_model(path)
-    return CachedModel(net, meta, path, True, time.perf_counter() - start)
+    return CachedModel(net.to(device), meta, path, True, time.perf_counter() - start)

@@ -51,7 +51,7 @@ def mean_grams(vgg: VGG19, images: Sequence[torch.Tensor], layers: Sequence[str]
     if not images:
         raise InputError("a style set needs at least one image")
     with torch.no_grad():
-        grams = [{k: gram(v) for k, v in vgg(preprocess(x), layers).items()} for x in images]
+        grams = [{k: gram(v) for k, v in vgg(preprocess(x.to(vgg.device)), layers).items()} for x in images]
     return {layer: torch.stack([g[layer] for g in grams]).mean(0) for layer in layers}
 
 

@@ -81,6 +81,11 @@ class VGG19(nn.Module):
         self.requires_grad_(False)
         self.eval()
 
+    @property
+    def device(self) -> torch.device:
+        """Where its weights are (``vgg.to(device)`` moves them); inputs are moved there by the callers."""
+        return self.convs["conv1_1"].weight.device
+
     def forward(self, x: torch.Tensor, wanted: Iterable[str]) -> dict[str, torch.Tensor]:
         wanted = set(wanted)
         unknown = wanted - set(LAYERS)

@@ -73,7 +73,8 @@ def test_the_commands_call_the_public_functions(tmp_path, monkeypatch):
     (tmp_path / "report.json").write_text('{"tables": {}}')   # the command prints its failure regions from it
     assert _command(["report", "runs/a", "runs/b", "--out", str(tmp_path), "--embedding", "scene"]) == 0
     assert calls[-1] == ("report", ([Path("runs/a"), Path("runs/b")], tmp_path),
-                         {"embedding": "scene", "clusters": None, "gallery": None, "seed": 0, "overwrite": False})
+                         {"embedding": "scene", "clusters": None, "gallery": None, "seed": 0, "device": "auto",
+                          "overwrite": False})
     _record(monkeypatch, "isu_validate.recreate", "plan_recreation", calls)
     with pytest.raises(Called):
         _command(["recreate", "runs/a", "--n", "3", "--out", str(tmp_path / "pairs")])

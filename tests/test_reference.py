@@ -132,7 +132,7 @@ def test_adapter_answers_only_what_is_asked_and_none_for_absent_things(trained, 
     from isu_validate.reference.adapter import ReferenceAdapter
 
     folder, _ = trained
-    monkeypatch.setattr(model_module, "Backbone", lambda *a: backbone)
+    monkeypatch.setattr(model_module, "Backbone", lambda *a, **where: backbone)
     adapter = ReferenceAdapter(space=SPACE, model_dir=str(folder / "model"))
     scene = SPACE.sample(np.random.default_rng(5), 1)[0]
     scene.update(luggage="NO", tshirt_colour="WHITE")

@@ -54,7 +54,7 @@ def make_dataset(folder: Path, n: int = 5, space_name: str = SPACE.name, space_h
 
 @pytest.fixture
 def same_backbone(monkeypatch, backbone):
-    monkeypatch.setattr(retrain_module, "Backbone", lambda *size: backbone)
+    monkeypatch.setattr(retrain_module, "Backbone", lambda *size, **where: backbone)
 
 
 def test_extra_retrains_on_the_stored_features_and_compares_on_the_same_held_out_scenes(

@@ -127,13 +127,15 @@ def test_train_then_stylise_with_the_fast_model(pairs, tmp_path, capsys):
     model, out = tmp_path / "fast.pt", tmp_path / "out"
     style = pairs / "s0" / "real" / "cam0.png"
     assert main(["stylize", "train", "--style", str(style), "--content", str(pairs / "s0"), "--out", str(model),
-                 "--steps", "2", "--crop", "24", "--width", "8", "--blocks", "1", "--batch-size", "1"]) == 0
+                 "--steps", "2", "--crop", "24", "--width", "8", "--blocks", "1", "--batch-size", "1",
+                 "--device", "cpu"]) == 0
     assert json.loads(capsys.readouterr().out)["steps"] == 2
     assert main(["stylize", str(pairs / "s1" / "sim.png"), "--method", "fast", "--model", str(model),
                  "--style", str(style), "--out", str(out)]) == 0
     with Image.open(out / "sim.png") as img:
         assert img.size == (40, 32)
-    assert json.loads((out / "stylize.json").read_text())["settings"]["steps_done"] == 2
+    report = json.loads((out / "stylize.json").read_text())
+    assert report["settings"]["steps_done"] == 2 and report["settings"]["trained_on"] == "cpu"
     assert main(["stylize", str(pairs / "s1" / "sim.png"), "--method", "fast", "--model", str(model),
                  "--style", str(pairs / "s1" / "sim.png"), "--out", str(out)]) == 2
     assert "trained for style" in capsys.readouterr().err
@@ -155,3 +157,22 @@ def test_stylize_skips_a_corrupt_image_with_a_message_and_keeps_the_others(tmp_p
     assert sorted(p.name for p in out.glob("*.png")) == ["a.png", "c.png"]
     report = json.loads((out / "stylize.json").read_text())
     assert report["count"] == 2 and [s["source"] for s in report["skipped"]] == [str(renders / "b.png")]
+
+
+def test_stylize_falls_back_from_an_absent_gpu_and_names_the_device(tmp_path, capsys, monkeypatch):
+    import torch
+    monkeypatch.setattr(torch.cuda, "is_available", lambda: False)
+    img = Image.new("RGB", (40, 32), (200, 40, 40))
+    ImageDraw.Draw(img).rectangle([8, 8, 30, 24], fill=(240, 240, 240))
+    img.save(tmp_path / "a.png")
+    out = tmp_path / "nst"
+    assert main(["stylize", "--style", str(tmp_path / "a.png"), str(tmp_path / "a.png"), "--size", "32",
+                 "--steps", "1", "--out", str(out), "--device", "cuda"]) == 0
+    err = capsys.readouterr().err
+    assert err.count("warning: device cuda is not available (torch sees no CUDA device") == 1
+    report = json.loads((out / "stylize.json").read_text())
+    assert report["device"].startswith("cpu (asked cuda: torch sees no CUDA device")
+    assert main(["stylize", "--style", str(tmp_path / "a.png"), str(tmp_path / "a.png"), "--size", "32",
+                 "--steps", "1", "--out", str(out), "--device", "cpu"]) == 0
+    again = json.loads((out / "stylize.json").read_text())
+    assert again["device"] == "cpu" and again["images"][0]["resumed"]   # a device change keeps the images

@@ -44,6 +44,7 @@ class AgreeSettings:
     feature_cache: str | None = None    # Inception feature cache (default: the realism command's)
     sut_timeout_s: float = 60.0
     sut_options: dict = field(default_factory=dict)
+    device: str = "auto"                # torch work: the reference ISU's backbone and Inception (devices.py)
 
 
 @dataclass
@@ -82,7 +83,7 @@ def measure_agreement(pairs_path: str | os.PathLike, out: str | os.PathLike, set
     space = _space(samples, settings.space)
     from ..sut import open_sut
     sut = open_sut(settings.sut, space=space, repeats=settings.repeats, cache_dir=out / "cache" / "sut",
-                   timeout_s=settings.sut_timeout_s, **settings.sut_options)
+                   timeout_s=settings.sut_timeout_s, device=settings.device, **settings.sut_options)
     asker, problems, rows, answered = Asker(sut, space), [], [], []
 
     def problem(text: str) -> None:
@@ -118,7 +119,8 @@ def measure_agreement(pairs_path: str | os.PathLike, out: str | os.PathLike, set
     summary["problems"] = problems
     summary["settings"] = {**{k: v for k, v in asdict(settings).items() if k != "sut_options"},
                            "space": space.name, "space_hash": space.hash, "pairs": str(Path(pairs_path).resolve()),
-                           "frames_compared_separately": True, "both_wrong_counts_as_agreement": True}
+                           "frames_compared_separately": True, "both_wrong_counts_as_agreement": True,
+                           "sut_device": getattr(sut.adapter, "device", None)}   # None: the SUT runs elsewhere
     _write(out, rows, summary)
     from .report import write_report
     write_report(out / "report.html", summary, rows, answered, space)
@@ -202,7 +204,7 @@ def _gap(answered: list[SampleAnswers], rows: list[dict], settings: AgreeSetting
     from .gap import domain_gap
     try:
         cache = Path(settings.feature_cache) if settings.feature_cache else None
-        return domain_gap(sim, real, nst, settings.threads, cache)
+        return domain_gap(sim, real, nst, settings.threads, cache, device=settings.device)
     except (OSError, ValueError, RuntimeError) as exc:
         problem(f"FID/KID not computed: {exc}")
         return {"skipped": str(exc)}

@@ -22,12 +22,13 @@ def build_report(run_paths, out_dir: Path, settings=None, overwrite: bool = Fals
 
 
 def report(runs, out: str | os.PathLike, *, embedding: str = "inception", clusters: int | None = None,
-           gallery: int | None = None, seed: int = 0, overwrite: bool = False) -> Path:
+           gallery: int | None = None, seed: int = 0, device: str = "auto", overwrite: bool = False) -> Path:
     """Compare runs as ``isu-validate report`` does: ``out/report.html``, ``out/report.json`` and one CSV
     per table; returns the HTML's path. ``runs``: run directories (a folder of runs stands for all of
     them); ``embedding``: ``inception``, ``scene`` (no images) or ``clip:PATH``; ``clusters`` (k of
-    k-means, default 10) and ``gallery`` (failing scenes shown, default 60) as the command's flags. ``out``
-    must be new or this same report's folder; another command's output (a run) needs ``overwrite=True``.
+    k-means, default 10) and ``gallery`` (failing scenes shown, default 60) as the command's flags; ``device``
+    where the image embedding runs (``auto|cpu|cuda[:N]|mps``, named in report.json's ``embedding_detail``).
+    ``out`` must be new or this same report's folder; another command's output (a run) needs ``overwrite=True``.
 
         report(["runs/surrogate-s1", "runs/rs-s1"], "report/", embedding="scene")
     """
@@ -40,8 +41,8 @@ def report(runs, out: str | os.PathLike, *, embedding: str = "inception", cluste
     if shown < 0:
         raise InputError(f"--gallery must be 0 or more, got {shown}")
     runs = [runs] if isinstance(runs, (str, os.PathLike)) else list(runs)   # one run, not its characters
-    return build_report(runs, out, ReportSettings(embedding=embedding, k=k, seed=seed, gallery=shown),
-                        overwrite=overwrite)
+    return build_report(runs, out, ReportSettings(embedding=embedding, k=k, seed=seed, gallery=shown,
+                                                     device=device), overwrite=overwrite)
 
 
 __all__ = ["build_report", "report", "write_run_report"]

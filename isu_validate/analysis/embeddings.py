@@ -36,41 +36,45 @@ class Embedder:
         return np.nan_to_num(np.array([space.canonical_vector(s) for s in scenes], dtype=float), nan=INACTIVE_CODE)
 
 
-def make_embedder(spec: str, batch_size: int = 8) -> Embedder:
-    """``inception`` | ``scene`` | ``clip:PATH``; raises ValueError naming the fix."""
+def make_embedder(spec: str, batch_size: int = 8, device: str = "auto") -> Embedder:
+    """``inception`` | ``scene`` | ``clip:PATH``; raises ValueError naming the fix. ``device``: where the image
+    encoders run (``devices.py``), named in the description."""
     if spec == "scene":
         return Embedder("scene", "scene-space encoding in [0,1] per feature (inactive = -1)", False)
     if spec == "inception":
-        return _inception(batch_size)
+        return _inception(batch_size, device)
     if spec.startswith("clip:"):
-        return _clip(Path(spec[5:]), batch_size)
+        return _clip(Path(spec[5:]), batch_size, device)
     raise InputError(f"unknown embedding {spec!r}; use inception, scene or clip:PATH "
                      "(a TorchScript or torch.export CLIP image encoder)")
 
 
-def _inception(batch_size: int) -> Embedder:
+def _inception(batch_size: int, device: str) -> Embedder:
     from ..realism.cache import default_cache_dir
     from ..realism.features import FeatureExtractor, stderr_progress
 
-    extractor = FeatureExtractor(batch_size=batch_size, cache=default_cache_dir())
+    extractor = FeatureExtractor(batch_size=batch_size, cache=default_cache_dir(), device=device)
 
     def embed(paths: Sequence[Path]) -> np.ndarray:
         return extractor.features(list(paths), progress=stderr_progress("failure embeddings") if paths else None)
 
     settings = extractor.settings
     return Embedder("inception", f"{settings.model}, weights sha1 {settings.weights_sha1[:12]}, "
-                    f"{settings.resize_filter} resize to {settings.input_size}", True, embed)
+                    f"{settings.resize_filter} resize to {settings.input_size}, on {extractor.device.describe()}",
+                    True, embed)
 
 
-def _clip(path: Path, batch_size: int) -> Embedder:
+def _clip(path: Path, batch_size: int, device: str) -> Embedder:
     if not path.is_file():
         raise InputError(f"CLIP weights {path} not found; pass clip:PATH to a TorchScript CLIP image encoder file")
     import torch
 
+    from ..devices import resolve_torch_device
     from ..realism.images import read_rgb
     from ..realism.resize import resize_rgb
 
-    model = _load_module(path)
+    where = resolve_torch_device(device)
+    model = _load_module(path).to(where.name)
 
     def embed(paths: Sequence[Path]) -> np.ndarray:
         out = []
@@ -78,11 +82,11 @@ def _clip(path: Path, batch_size: int) -> Embedder:
             batch = np.stack([resize_rgb(read_rgb(p), CLIP_SIZE) / 255.0 for p in paths[start:start + batch_size]])
             x = torch.from_numpy(((batch - CLIP_MEAN) / CLIP_STD).astype(np.float32)).permute(0, 3, 1, 2)
             with torch.inference_mode():
-                out.append(model(x).reshape(len(batch), -1).double().numpy())
+                out.append(model(x.to(where.name)).reshape(len(batch), -1).double().cpu().numpy())
         return np.concatenate(out) if out else np.zeros((0, 0))
 
     return Embedder("clip", f"user-supplied CLIP image encoder {path.name}, {CLIP_SIZE}x{CLIP_SIZE}, CLIP "
-                    "normalisation", True, embed)
+                    f"normalisation, on {where.describe()}", True, embed)
 
 
 def _load_module(path: Path):

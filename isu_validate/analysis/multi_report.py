@@ -34,12 +34,13 @@ class ReportSettings:
     k: int = DEFAULT_K
     seed: int = 0
     gallery: int = DEFAULT_GALLERY
+    device: str = "auto"     # where the image embedding runs (devices.py)
 
 
 def build_report(run_paths: list, out_dir: Path, settings: ReportSettings | None = None,
                  log=lambda msg: print(msg, file=sys.stderr), overwrite: bool = False) -> Path:
     settings = settings or ReportSettings()
-    embedder = make_embedder(settings.embedding)  # fail on a bad embedding before reading runs
+    embedder = make_embedder(settings.embedding, device=settings.device)  # fail on a bad embedding before reading runs
     runs = name_uniquely([load_run(p) for p in find_runs(run_paths)])
     if not runs:
         raise InputError("no runs given; pass one or more run directories")

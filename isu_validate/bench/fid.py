@@ -14,6 +14,7 @@ import warnings
 
 import numpy as np
 
+from isu_validate.devices import add_device_argument
 from isu_validate.errors import InputError
 
 
@@ -27,6 +28,10 @@ def register_bench(sub) -> None:
     p.add_argument("--batch-size", type=int, default=8)
     p.add_argument("--threads", type=int, default=None)
     p.add_argument("--seed", type=int, default=0)
+    add_device_argument(p)
+    p.add_argument("--device-check", type=int, default=0, metavar="N",
+                   help="also extract N frames' features (--a/--b, else synthetic) on the CPU and on --device and "
+                        "print how far FID and the features move (the tolerance of issue 34); 0 skips")
     p.set_defaults(func=run)
 
 
@@ -96,12 +101,41 @@ def spread_table(pool_a: np.ndarray, pool_b: np.ndarray, sizes: list[int], repea
               f"{per:>14.3f}")
 
 
-def throughput_table(count: int, batch_size: int, seed: int) -> None:
+def device_check_table(count: int, batch_size: int, seed: int, device: str, sets: tuple | None) -> None:
+    """FID and features of the same frames on the CPU and on ``device``: relative FID change, worst feature."""
+    from isu_validate.realism.features import FeatureExtractor
+    from isu_validate.realism.fid import fid
+    from isu_validate.realism.images import read_rgb
+    from isu_validate.realism.sets import resolve_set
+    if sets:
+        frames = [[read_rgb(p) for p in resolve_set(s).paths[:count]] for s in sets]
+    else:
+        rng = np.random.default_rng(seed)
+        frames = [[rng.uniform(lo, lo + 128, (480, 640, 3)).astype(np.float32) for _ in range(count)] for lo in (0, 96)]
+    cpu, other = FeatureExtractor(batch_size=batch_size), FeatureExtractor(batch_size=batch_size, device=device)
+    if other.device.is_cpu:
+        print(f"\n4. device check skipped: {other.device.describe()}")
+        return
+
+    def feats(ex):
+        return [np.concatenate([ex.features_of_arrays(f[i:i + batch_size]) for i in range(0, len(f), batch_size)])
+                for f in frames]
+    on_cpu, on_dev = feats(cpu), feats(other)
+    fid_cpu, fid_dev = fid(*on_cpu), fid(*on_dev)
+    worst = max(float(np.max(np.abs(a - b))) for a, b in zip(on_cpu, on_dev))
+    scale = max(float(np.max(np.abs(a))) for a in on_cpu)
+    print(f"\n4. cpu against {other.device.describe()}: {len(frames[0])} + {len(frames[1])} frames")
+    change = abs(fid_dev - fid_cpu) / max(fid_cpu, 1e-12)
+    print(f"   FID {fid_cpu:.6f} (cpu) / {fid_dev:.6f}: relative change {change:.2e}; "
+          f"largest feature change {worst:.2e} (largest feature {scale:.3g})")
+
+
+def throughput_table(count: int, batch_size: int, seed: int, device: str = "cpu") -> None:
     from isu_validate.realism.features import FeatureExtractor
     from isu_validate.realism.resize import resize_rgb
     rng = np.random.default_rng(seed)
     frames = [rng.uniform(0, 255, (480, 640, 3)).astype(np.float32) for _ in range(count)]
-    ex = FeatureExtractor(batch_size=batch_size)
+    ex = FeatureExtractor(batch_size=batch_size, device=device)
     for _ in range(3):  # TorchScript's profiling executor optimises the graph over the first calls
         ex.features_of_arrays(frames[:batch_size])
     t0 = time.perf_counter()
@@ -115,7 +149,8 @@ def throughput_table(count: int, batch_size: int, seed: int) -> None:
             ex.features_of_arrays(frames[i:i + batch_size])
         rates.append(count / (time.perf_counter() - start))
     import torch
-    print(f"\n3. feature extraction, 640x480 frames, batch {batch_size}, {torch.get_num_threads()} torch threads")
+    print(f"\n3. feature extraction, 640x480 frames, batch {batch_size}, {torch.get_num_threads()} torch threads, "
+          f"on {ex.device.describe()}")
     print(f"   resize only: {count / (t1 - t0):.1f} images/s; resize + Inception: "
           f"{np.median(rates):.2f} / {max(rates):.2f} images/s (median / best of 3 rounds)")
 
@@ -129,7 +164,7 @@ def _pools(args):
     from isu_validate.realism.sets import resolve_set
     if not args.b:
         raise InputError("bench fid needs both --a and --b (or neither, for synthetic features)")
-    ex = FeatureExtractor(batch_size=args.batch_size, cache=default_cache_dir())
+    ex = FeatureExtractor(batch_size=args.batch_size, cache=default_cache_dir(), device=args.device)
     pools = tuple(ex.features(resolve_set(s).paths, stderr_progress(s)) for s in (args.a, args.b))
     return pools, f"Inception features of {args.a} and {args.b}"
 
@@ -156,5 +191,8 @@ def _run(args) -> int:
     agreement_table(pool_a, pool_b, sizes)
     spread_table(pool_a, pool_b, sizes, args.repeats, args.seed)
     if args.throughput_images:
-        throughput_table(args.throughput_images, args.batch_size, args.seed)
+        throughput_table(args.throughput_images, args.batch_size, args.seed, args.device)
+    if args.device_check:
+        device_check_table(args.device_check, args.batch_size, args.seed, args.device,
+                           (args.a, args.b) if args.a else None)
     return 0

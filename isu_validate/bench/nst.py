@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from isu_validate.devices import add_device_argument, resolve_torch_device
 from isu_validate.errors import InputError
 
 
@@ -37,6 +38,7 @@ def register_bench(sub) -> None:
     p.add_argument("--gatys-images", type=int, default=3, help="with --pairs-scale: pairs Gatys styles (default 3; "
                                                                "its total for N is extrapolated)")
     p.add_argument("--threads", type=int, default=None)
+    add_device_argument(p)
     p.set_defaults(func=run)
 
 
@@ -80,29 +82,30 @@ def _images(args, folder: Path) -> tuple[Path, Path]:
     return folder / "render.png", folder / "photo.png"
 
 
-def gatys_table(content_path: Path, style_path: Path, size: int, steps: list[int], optimizer: str) -> None:
+def gatys_table(content_path: Path, style_path: Path, size: int, steps: list[int], optimizer: str,
+                device: str = "cpu") -> None:
     import torch  # imported here: registering the bench must not load torch
     from style_transfer.gatys import GatysConfig, stylize_gatys
     from style_transfer.imageio import load_image
     from style_transfer.preservation import luminance, ssim_luma
     from style_transfer.vgg import VGG19
-    vgg = VGG19("avg")
+    vgg = VGG19("avg").to(device)
     content, style = load_image(content_path, size), load_image(style_path, size)
     luma_in = luminance(content[0].permute(1, 2, 0).numpy().astype(np.float64))
     print(f"Gatys ({optimizer}), {tuple(content.shape[-2:])} pixels, {torch.get_num_threads()} torch threads")
     print(f"{'steps':>6} {'evals':>6} {'loss/loss0':>11} {'SSIM-luma':>10} {'seconds':>8}")
     for n in steps:
         r = stylize_gatys(content, style, GatysConfig(steps=n, size=size, optimizer=optimizer), vgg)
-        ssim = ssim_luma(luma_in, luminance(r.image[0].permute(1, 2, 0).numpy().astype(np.float64)))
+        ssim = ssim_luma(luma_in, luminance(r.image[0].permute(1, 2, 0).cpu().numpy().astype(np.float64)))
         print(f"{n:>6} {len(r.losses):>6} {r.losses[-1] / r.losses[0]:>11.4f} {ssim:>10.3f} {r.seconds:>8.1f}")
 
 
-def fast_table(model: Path | None, frames: int, folder: Path) -> None:
+def fast_table(model: Path | None, frames: int, folder: Path, device: str = "cpu") -> None:
     import torch  # imported here: registering the bench must not load torch
     from style_transfer.fast import load_model, stylize_fast
     from style_transfer.fast_net import FastStyleNet
     from style_transfer.imageio import load_image, save_image
-    net = load_model(model)[0] if model else FastStyleNet().eval()
+    net = (load_model(model)[0] if model else FastStyleNet().eval()).to(device)
     render, _ = synthetic_pair()
     render.save(folder / "frame.png")
     x = load_image(folder / "frame.png")
@@ -124,9 +127,9 @@ def fast_table(model: Path | None, frames: int, folder: Path) -> None:
           f"file to file (PNG read + net + PNG write): {files[0]:.1f} / {files[1]:.1f} images/s")
 
 
-def train_table(content: Path, style: Path, steps: int, folder: Path) -> None:
+def train_table(content: Path, style: Path, steps: int, folder: Path, device: str = "cpu") -> None:
     from style_transfer.fast import FastTrainConfig, train_fast
-    report = train_fast(style, [content], folder / "m.pt", FastTrainConfig(steps=steps), resume=False)
+    report = train_fast(style, [content], folder / "m.pt", FastTrainConfig(steps=steps), resume=False, device=device)
     print(f"\nfast-model training: {steps} steps (batch 2, crop 128) in {report.seconds:.1f} s "
           f"({report.seconds / steps:.2f} s/step); loss {report.losses[0]:.4g} -> {report.losses[-1]:.4g}")
 
@@ -167,15 +170,19 @@ def run(args) -> int:
     if args.threads:
         torch.set_num_threads(args.threads)
     if args.pairs_scale:
-        return pairs_table(args.pairs_scale, args.pairs, args.gatys_images, args.threads or torch.get_num_threads())
+        return pairs_table(args.pairs_scale, args.pairs, args.gatys_images, args.threads or torch.get_num_threads(),
+                           args.device)
+    device = resolve_torch_device(args.device)
+    print(f"bench nst on {device.describe()}")
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         content, style = _images(args, folder)
-        gatys_table(content, style, args.size, [int(s) for s in args.steps.split(",") if s.strip()], args.optimizer)
+        gatys_table(content, style, args.size, [int(s) for s in args.steps.split(",") if s.strip()], args.optimizer,
+                    device.name)
         if args.frames:
-            fast_table(args.model, args.frames, folder)
+            fast_table(args.model, args.frames, folder, device.name)
         if args.train_steps:
-            train_table(content, style, args.train_steps, folder)
+            train_table(content, style, args.train_steps, folder, device.name)
         if args.gap:
             gap_table(args.gap, args.train_steps or 100, folder, args.style_weight)
     return 0
@@ -236,7 +243,7 @@ def _quality(distance, records: list[dict]) -> dict:
             "edge": float(np.mean([r["edge_agreement"] for r in records]))}
 
 
-def pairs_table(n: int, source: Path | None, gatys_images: int, threads: int) -> int:
+def pairs_table(n: int, source: Path | None, gatys_images: int, threads: int, device: str = "auto") -> int:
     """The fast default on N pairs, end to end, against Gatys on the first few of them."""
     import os
     import shutil
@@ -246,7 +253,7 @@ def pairs_table(n: int, source: Path | None, gatys_images: int, threads: int) ->
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         pairs = scaled_pairs(n, source, folder)
-        common = ["--threads", str(threads)]
+        common = ["--threads", str(threads), "--device", device]
         fast_run = ["--pairs", str(pairs), "--model-cache", str(folder / "cache"), *common]
         fast, fast_wall, fast_cpu = _stylize(fast_run, pairs / "nst.json")
         _, rerun_wall, _ = _stylize(fast_run, pairs / "nst.json")

@@ -13,6 +13,8 @@ from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from isu_validate.devices import add_render_device_argument
+
 if TYPE_CHECKING:   # numpy and OpenCV load when the bench runs, not for its --help
     import numpy as np
 
@@ -28,6 +30,8 @@ def register_bench(sub) -> None:
                         "from a 1024-sample reference already)")
     p.add_argument("--rig", default="default")
     p.add_argument("--threads", type=int, default=0, help="Cycles threads (0 = all cores)")
+    add_render_device_argument(p)   # the presets' device; the reference renders on the CPU, so PSNR/SSIM
+                                    # against it measure what a GPU changes in the pixels
     p.add_argument("--sut", help="also ask this SUT (spec as in `run --sut`) about every frame and report the "
                    "share of answers unchanged against the reference frame: the error that matters")
     p.add_argument("--out", type=Path, default=Path("runs/bench-render"), help="folder for frames and bench.json; "
@@ -58,7 +62,8 @@ def run(args) -> int:
         if sut:
             rows[-1]["sut_unchanged"] = sut.unchanged([args.out / f"{preset.name}-{i}.png" for i in range(len(scenes))])
         _print_row(rows[-1])
-    report = {"rig": args.rig, "scenes": args.scenes, "seed": args.seed, "repeat": args.repeat,
+    report = {"rig": args.rig, "render_device_asked": args.render_device, "scenes": args.scenes, "seed": args.seed,
+              "repeat": args.repeat,
               "reference": {"samples": reference.samples, "denoise": reference.denoise,
                             "prefilter": reference.prefilter, "max_bounces": reference.max_bounces},
               "presets": rows}
@@ -73,7 +78,7 @@ def _references(scenes, reference, args, space) -> list[np.ndarray]:
     import cv2
 
     from isu_validate.render import open_renderer
-    with open_renderer(reference, args.rig, log_dir=args.out / "logs", timeout_s=3600) as r:
+    with open_renderer(reference, args.rig, log_dir=args.out / "logs", timeout_s=3600, device="cpu") as r:
         paths = [args.out / f"reference-{r.cache_key(space.canonical(s))[:16]}.png" for s in scenes]
         todo = [(s, p) for s, p in zip(scenes, paths) if not p.is_file()]
         if todo:
@@ -94,7 +99,7 @@ def _bench_preset(preset, scenes, refs, args, space, people: bool = True) -> dic
     from isu_validate.render import open_renderer
     times, psnr, ssim = [], [], []
     parts = {"people_s": [], "update_s": [], "render_s": [], "write_s": [], "worker_cpu_s": [], "footprint_s": []}
-    with open_renderer(preset, args.rig, log_dir=args.out / "logs") as r:
+    with open_renderer(preset, args.rig, log_dir=args.out / "logs", device=args.render_device) as r:
         r.show_people = people
         tag = "" if people else "-nopeople"
         r.render(scenes[0], args.out / f"{preset.name}{tag}-warmup.png")   # kernel load, first BVH: not timed
@@ -111,9 +116,10 @@ def _bench_preset(preset, scenes, refs, args, space, people: bool = True) -> dic
                         img = cv2.resize(img, (ref.shape[1], ref.shape[0]), interpolation=cv2.INTER_CUBIC)
                     psnr.append(peak_signal_noise_ratio(ref, img, data_range=255))
                     ssim.append(structural_similarity(ref, img, channel_axis=2, data_range=255))
-        width, height = r.render_rig.width, r.render_rig.height
-    return {"preset": preset.name, "resolution": f"{width}x{height}", "samples": preset.samples,
-            "denoise": preset.denoise, "prefilter": preset.prefilter, "max_bounces": preset.max_bounces,
+        width, height, device = r.render_rig.width, r.render_rig.height, r.preset.device
+    return {"preset": preset.name, "render_device": device, "resolution": f"{width}x{height}",
+            "samples": preset.samples, "denoise": preset.denoise, "prefilter": preset.prefilter,
+            "max_bounces": preset.max_bounces,
             "s_per_frame": {"median": statistics.median(times), "min": min(times), "max": max(times)},
             "median_parts_s": {k: statistics.median(v) for k, v in parts.items()},
             "psnr_db": float(np.mean(psnr)) if psnr else None, "ssim": float(np.mean(ssim)) if ssim else None,
@@ -144,7 +150,7 @@ class _SUTCheck:
 
 def _print_row(row: dict) -> None:
     s = row["s_per_frame"]
-    print(f"{row['preset']:>9} {row['resolution']:>8} {row['samples']:>4} spp  "
+    print(f"{row['preset']:>9} {row['resolution']:>8} {row['samples']:>4} spp {row['render_device']:>5}  "
           f"s/frame median {s['median']:.2f} (min {s['min']:.2f}, max {s['max']:.2f})  "
           f"PSNR {row['psnr_db']:.1f} dB  SSIM {row['ssim']:.4f}  "
           + (f"SUT unchanged {row['sut_unchanged']:.1%}  " if row.get("sut_unchanged") is not None else "") +

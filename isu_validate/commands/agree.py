@@ -17,6 +17,7 @@ import os
 import sys
 from pathlib import Path
 
+from ..devices import add_device_argument
 from ..errors import InputError
 from . import add_overwrite_option
 
@@ -42,6 +43,7 @@ def register(sub) -> None:
     p.add_argument("--feature-cache", help="Inception feature cache folder (default ~/.cache/isu-validate/...)")
     p.add_argument("--threads", type=int, default=min(4, os.cpu_count() or 1), help="torch/BLAS threads for FID/KID")
     p.add_argument("--sut-timeout", type=float, default=60.0, help="seconds per SUT request")
+    add_device_argument(p)
     p.add_argument("--json", action="store_true", help="print summary.json")
     v = p.add_argument_group("votes")
     v.add_argument("--annotator", help="votes: your name")
@@ -63,7 +65,7 @@ def run(args) -> int:
     settings = AgreeSettings(sut=args.sut, repeats=args.repeats, space=args.space,
                              include_invalid=args.include_invalid, realism=not args.no_realism,
                              threads=args.threads, feature_cache=args.feature_cache, sut_timeout_s=args.sut_timeout,
-                             sut_options=parse_options(args.sut_option))
+                             sut_options=parse_options(args.sut_option), device=args.device)
     result = measure_agreement(args.target[0], args.out, settings, overwrite=args.overwrite)
     s = result.summary
     if args.json:

@@ -7,6 +7,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from ..dataset.settings import DatasetSettings
+from ..devices import add_device_argument, add_render_device_argument
 
 _DEFAULTS = DatasetSettings()
 # options that decide the images: left out on --resume, they take the stored value
@@ -52,6 +53,8 @@ def register(sub) -> None:
                    help="continue the dataset in --out; options left out keep their stored values, others must match")
     p.add_argument("--workers", type=int, default=1, help="local render processes (default 1)")
     p.add_argument("--cluster", metavar="ADDRESS", help="a Dask scheduler to render on, as `run --cluster`")
+    add_render_device_argument(p)
+    add_device_argument(p)
     # module:function(space) -> renderer: the tests make datasets without Blender
     p.add_argument("--renderer-factory", help=argparse.SUPPRESS)
     p.set_defaults(func=run, interrupted="interrupted; every finished image is kept (continue with --resume)")
@@ -63,7 +66,8 @@ def run(args) -> int:
     given = {name: _value(getattr(args, name)) for name in _IDENTITY if getattr(args, name) is not None}
     folder = DatasetDir(args.out)
     base = DatasetSettings.from_dict(folder.info()["settings"]) if args.resume and folder.is_dataset() else _DEFAULTS
-    settings = replace(base, **given, workers=args.workers, cluster=args.cluster)
+    settings = replace(base, **given, workers=args.workers, cluster=args.cluster, render_device=args.render_device,
+                       device=args.device)
     summary = build_dataset(settings, args.out, resume=args.resume)
     copies = summary.images - summary.renders
     print(f"dataset {summary.out}: {summary.renders} renders" + (f" + {copies} style copies" if copies else "")

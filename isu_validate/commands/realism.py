@@ -8,9 +8,9 @@ from __future__ import annotations
 import json
 import os
 import sys
-from dataclasses import asdict
 from pathlib import Path
 
+from ..devices import add_device_argument
 from ..errors import InputError
 from . import add_overwrite_option
 
@@ -38,6 +38,7 @@ def register(sub) -> None:
                    help="anti-aliased resize to 299 (default bicubic, as clean-fid)")
     p.add_argument("--batch-size", type=int, default=8)
     p.add_argument("--threads", type=int, default=min(4, os.cpu_count() or 1), help="torch CPU threads")
+    add_device_argument(p)
     p.add_argument("--cache-dir", type=Path, default=None,
                    help="per-image feature cache (default ~/.cache/isu-validate/inception-features)")
     p.add_argument("--no-cache", action="store_true", help="extract features without reading or writing the cache")
@@ -91,14 +92,14 @@ def _run(args) -> int:
         from isu_validate.archive.output_dir import claim_output_file
         claim_output_file(args.out, "realism", overwrite=args.overwrite)
     cache = None if args.no_cache else (args.cache_dir or default_cache_dir())
-    extractor = FeatureExtractor(args.weights, args.resize_filter, args.batch_size, cache)
+    extractor = FeatureExtractor(args.weights, args.resize_filter, args.batch_size, cache, args.device)
     metric = MetricSettings(args.bootstrap, args.ci_level, args.kid_subset_size, args.kid_subsets, args.seed)
     feats: dict[str, object] = {}
     marks: dict[str, tuple] = {}   # spec -> (Provenance, stand-in mask) of a set taken for reality
     results, counts = {}, {}
 
     def compare(name: str, a: str, b: str, f_a, f_b) -> None:
-        result = compare_features(f_a, f_b, metric, asdict(extractor.settings))
+        result = compare_features(f_a, f_b, metric, extractor.report_settings())
         result.settings.update(set_a=a, set_b=b, feature_cache=str(cache) if cache else "off")
         results[name] = result
 
@@ -176,6 +177,6 @@ def _emit(args, results, counts, marks) -> None:
         print(f"  KID {r.kid_mean:.5f} ± {r.kid_std:.5f}  (subset size {r.settings['kid_subset_size']}, "
               f"{r.settings['kid_subsets']} subsets, seed {r.settings['seed']})")
         print(f"  features: {r.settings['model']}, resize {r.settings['resize_filter']} to "
-              f"{r.settings['input_size']} ({r.settings['resize_impl']})")
+              f"{r.settings['input_size']} ({r.settings['resize_impl']}), on {r.settings['device']}")
         for w in r.warnings:
             print(f"  warning: {w}", file=sys.stderr)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from ..devices import add_device_argument, add_render_device_argument
 from ..errors import InputError
 from . import add_overwrite_option
 
@@ -27,6 +28,8 @@ def register(sub) -> None:
                             "accuracy on them, e.g. standard:100 (repeatable)")
     train.add_argument("--camera", help=f"camera rig name or .toml path the scenes are rendered through "
                                         f"(default {DEFAULTS['camera']})")
+    add_render_device_argument(train)
+    add_device_argument(train)
     train.add_argument("--cabin", help=f"cabin rig name or .toml path (default {DEFAULTS['cabin']})")
     train.add_argument("--extra", nargs="+", type=Path, metavar="DATASET",
                        help="retrain on the --base model's own training scenes (its stored features: nothing is "
@@ -76,12 +79,14 @@ def cmd_train_new(args) -> int:
 
     def renderer_for(preset: str):
         return open_renderer(preset=preset, camera=args.camera, cabin=args.cabin, space=space,
-                             cache_dir=args.workdir / "cache", log_dir=args.workdir / "logs")
+                             cache_dir=args.workdir / "cache", log_dir=args.workdir / "logs",
+                             device=args.render_device)
 
     renderer = renderer_for(args.preset)
     try:
         card = train_reference(space, renderer, out, args.workdir, args.n, args.held_out, args.seed, args.preset,
-                               other_presets=checks, renderer_for=renderer_for, renderer_version=RENDERER_VERSION)
+                               other_presets=checks, renderer_for=renderer_for, renderer_version=RENDERER_VERSION,
+                               device=args.device)
     finally:
         renderer.close()
     output.mark()   # the model is written last, so a refused or failed training leaves no folder behind
@@ -113,7 +118,7 @@ def cmd_retrain(args) -> int:
         dataset = open_dataset(folder)
         extra.append(extra_set(folder, dataset.info(), dataset.metadata(), space))
     card = retrain_with_extra(space, base, extra, out, RENDERER_VERSION,
-                              cache_dir=args.workdir / "extra-features")
+                              cache_dir=args.workdir / "extra-features", device=args.device)
     output.mark()
     print((out / "MODEL_CARD.md").read_text())
     _print_written(out, default_model_dir())

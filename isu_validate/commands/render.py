@@ -5,6 +5,7 @@ import json
 import sys
 from pathlib import Path
 
+from ..devices import add_render_device_argument
 from ..errors import UserError
 from . import add_overwrite_option
 
@@ -36,6 +37,7 @@ def register(sub) -> None:
     p.add_argument("--log", type=Path, help="folder for Blender's console log (default: <out folder>/logs)")
     p.add_argument("--timeout", type=float, default=240.0, help="seconds per render before the worker is killed")
     add_overwrite_option(p, "another command's output (--random)")
+    add_render_device_argument(p)
     p.add_argument("--sheet-tile", type=int, default=320, metavar="PX",
                    help="width of each frame on the contact sheet of --random (default 320)")
     p.set_defaults(func=run)
@@ -70,7 +72,7 @@ def run(args) -> int:
     unusable = 0
     with open_renderer(args.preset, args.rig, args.cabin, args.channels, args.cache, log_dir, args.timeout,
                        space, extrinsics_from=args.extrinsics_from,
-                       min_visible=parse_min_visible(args.min_visible)) as renderer:
+                       min_visible=parse_min_visible(args.min_visible), device=args.render_device) as renderer:
         for k, (out, scene) in enumerate(targets, 1):
             if args.random is not None:
                 out.parent.mkdir(parents=True, exist_ok=True)

@@ -19,6 +19,7 @@ from pathlib import Path
 from ..analysis.html import threshold_label
 from ..config import DEFAULT_SUT_ERROR_LIMIT
 from . import add_overwrite_option
+from ..devices import add_device_argument
 from .sut import parse_options
 
 
@@ -34,6 +35,7 @@ def register(sub) -> None:
                    help="count fixed/new failures at this F_qa threshold (default: the run's oracle threshold)")
     p.add_argument("--repeats", type=int, help="SUT queries per image, per-feature majority (default: the run's)")
     p.add_argument("--sut-timeout", type=float, help="seconds per SUT request (default: the run's)")
+    add_device_argument(p)
     p.add_argument("--stop-after-sut-errors", type=int, default=DEFAULT_SUT_ERROR_LIMIT, metavar="N",
                    help=f"stop after N SUT errors in a row with no answer in between (default "
                         f"{DEFAULT_SUT_ERROR_LIMIT}; 0 never stops)")
@@ -50,7 +52,7 @@ def run(args) -> int:
                         "command again to continue")
     settings = ReplaySettings(sut=args.sut, sut_options=parse_options(args.sut_option), threshold=args.threshold,
                               repeats=args.repeats, sut_timeout_s=args.sut_timeout,
-                              stop_after_sut_errors=args.stop_after_sut_errors)
+                              stop_after_sut_errors=args.stop_after_sut_errors, device=args.device)
     result = replay_run(args.run, args.out, settings, overwrite=args.overwrite)
     print(_lines(result.summary, args.out))
     if result.exit_code:

@@ -4,6 +4,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from . import add_overwrite_option
+from ..devices import add_device_argument
 
 
 def register(sub) -> None:
@@ -23,6 +24,7 @@ def register(sub) -> None:
     p.add_argument("--gallery", type=int, default=None, metavar="N", help="failing scenes shown (default 60)")
     p.add_argument("--seed", type=int, default=0, help="seed for k-means")
     add_overwrite_option(p, "a report of other runs or settings, or another command's output (a run)")
+    add_device_argument(p)   # the image embedding's device
     p.set_defaults(func=cmd_report)
 
 
@@ -30,7 +32,7 @@ def cmd_report(args) -> int:
     from ..analysis import report
 
     path = report(args.runs, args.out, embedding=args.embedding, clusters=args.clusters, gallery=args.gallery,
-                  seed=args.seed, overwrite=args.overwrite)
+                  seed=args.seed, device=args.device, overwrite=args.overwrite)
     print(f"report: {path}")
     for line in region_lines(path.parent / "report.json"):
         print(line)

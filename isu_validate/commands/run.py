@@ -14,6 +14,7 @@ from pathlib import Path
 
 from ..archive.run_file import RUN_FILE, ResumeMismatch, RunError, read_run_file
 from ..config import DEFAULT_MIN_VISIBLE, PipelineConfig, RunConfig
+from ..devices import add_device_argument, add_render_device_argument
 from ..search.algorithm_names import ALGORITHMS, algorithm_option
 from ..sut.prompt import PROMPT_STYLES
 from .sut import parse_options
@@ -115,6 +116,8 @@ def add_run_options(p) -> None:
                         f"{r.stop_after_sut_errors}; 0 never stops)")
     p.add_argument("--workers", type=int, help="parallel evaluation processes (default 1)")
     p.add_argument("--cluster", help="Dask scheduler address (instead of local workers)")
+    add_render_device_argument(p)
+    add_device_argument(p)
     p.add_argument("--no-report", action="store_true", help="do not write report.html at the end")
     # where the renderer, SUT and judge come from (module:function); an extension point
     p.add_argument("--pipeline-factory", help=argparse.SUPPRESS)
@@ -158,7 +161,8 @@ def config_from_args(args) -> RunConfig:
         run = {**_known(RunConfig, stored), **run}
     run.pop("pipeline", None)
     config = PipelineConfig(**{**pipeline, "run_dir": str(args.out),
-                               "render_threads": render_threads(volatile["workers"])})
+                               "render_threads": render_threads(volatile["workers"]),
+                               "render_device": args.render_device, "device": args.device})
     return RunConfig(pipeline=config, **{**run, **volatile})
 
 

@@ -24,6 +24,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from isu_validate.atomic import write_text
+from isu_validate.devices import add_device_argument, resolve_torch_device
 from isu_validate.errors import InputError
 from isu_validate.image_files import expand_images
 from isu_validate.pairs import PairsDir
@@ -58,6 +59,7 @@ def register(sub) -> None:
                    help="measure the style distance of render and output on N images spread over the set "
                         "(default 8; two VGG passes each; 0: none)")
     p.add_argument("--threads", type=int, default=min(4, os.cpu_count() or 1))
+    add_device_argument(p)
     p.add_argument("--seed", type=int, default=0)
     g = p.add_argument_group("gatys")
     g.add_argument("--size", type=int, default=192,
@@ -94,6 +96,7 @@ def register(sub) -> None:
 def run(args) -> int:
     import torch
     torch.set_num_threads(max(1, args.threads))
+    args.torch_device = resolve_torch_device(args.device)   # once: one fallback line, one name in the report
     if args.images[:1] == ["train"]:
         return _train(args)
     args.interrupted = ("interrupted; the images styled so far and any training checkpoint are kept: "
@@ -125,7 +128,8 @@ def run(args) -> int:
         print(f"stylize: skipped {len(skipped)} unreadable image(s), listed in the report", file=sys.stderr)
     if args.pairs and args.sut:
         summary["answer_flips"] = _flips(args)
-    summary |= {"wall_seconds": round(time.perf_counter() - wall, 3), "complete": True, "settings_key": stylise.key}
+    summary |= {"wall_seconds": round(time.perf_counter() - wall, 3), "complete": True, "settings_key": stylise.key,
+                "device": args.torch_device.describe()}   # not in the key: a device change keeps earlier images
     _write(report, summary)
     print(json.dumps({k: v for k, v in summary.items() if k != "images"}, indent=2))
     return 0
@@ -137,7 +141,7 @@ def _style_all(args, jobs, stylise, styles, report: Path, earlier: dict) -> tupl
     from style_transfer.style_set import file_sha256
     done = {r["output"]: r for r in earlier.get("images", []) if isinstance(r, dict) and "output" in r}
     measured = _spread(len(jobs), args.style_distance) if styles else set()
-    measure = _StyleMeasure(styles) if measured else None
+    measure = _StyleMeasure(styles, args.torch_device.name) if measured else None
     records, skipped = [], []
     for i, (src, dst) in enumerate(jobs, 1):
         start = time.perf_counter()
@@ -274,7 +278,7 @@ class _Gatys:
         from style_transfer.style_set import load_style_grams
         self.cfg = _gatys_config(args)
         self.cfg.check()
-        self.vgg = VGG19(self.cfg.pooling)
+        self.vgg = VGG19(self.cfg.pooling).to(args.torch_device.name)
         self.grams = load_style_grams(self.vgg, styles, self.cfg.style_size or self.cfg.size, self.cfg.style_layers)
         # the settings travel with the outputs so the report states exactly what produced the images
         self._settings = {"method": "gatys", **_plain(self.cfg.__dict__), **_style_settings(styles),
@@ -324,7 +328,7 @@ class _Fast:
         self.size = _or(args.fast_size, FAST_SIZE) or None
         self.model = None  # CachedModel, or (net, meta) of --model
         if args.model:
-            self.model = _given_model(args.model, styles)
+            self.model = _given_model(args.model, styles, args.torch_device.name)
             source = {"model": str(args.model), "model_sha256": _file_digest(args.model)}
         else:
             from style_transfer.model_cache import AUTO_TRAIN, model_key
@@ -348,7 +352,8 @@ class _Fast:
         """Train or load the net (the first image needs it; a run whose images are all kept never does)."""
         if self.model is None:
             from style_transfer.model_cache import fast_model_for
-            self.model = fast_model_for(self.styles, self.renders, self.cfg, self.args.model_cache, _train_progress)
+            self.model = fast_model_for(self.styles, self.renders, self.cfg, self.args.model_cache, _train_progress,
+                                        self.args.torch_device.name)
             m = self.model
             print(f"stylize: fast net {'trained in %.0f s' % m.train_seconds if m.trained else 'from the cache'}"
                   f" ({m.path})", file=sys.stderr)
@@ -365,10 +370,11 @@ class _Fast:
         return {"noise_seed": seed}
 
 
-def _given_model(path: Path, styles: list[Path] | None):
+def _given_model(path: Path, styles: list[Path] | None, device: str):
     from style_transfer import load_model
     from style_transfer.style_set import fingerprint
     net, meta = load_model(path)
+    net.to(device)
     if styles:
         trained_for = meta.get("style_set_sha256") or meta.get("style_sha256")
         if fingerprint(styles) != trained_for:
@@ -400,13 +406,13 @@ def _plain_deep(cfg) -> dict:
 class _StyleMeasure:
     """Style distance of each render and its output to the style set (``style_transfer.distance``)."""
 
-    def __init__(self, styles: list[Path]):
-        self.styles, self.distance = styles, None
+    def __init__(self, styles: list[Path], device: str):
+        self.styles, self.distance, self.device = styles, None, device
 
     def __call__(self, src: Path, dst: Path) -> dict:
         from style_transfer.distance import StyleDistance, gap_closed
         if self.distance is None:  # VGG and the photos' Grams only when an image is measured
-            self.distance = StyleDistance(self.styles)
+            self.distance = StyleDistance(self.styles, device=self.device)
         before, after = self.distance(src), self.distance(dst)
         return {"render_style_distance": before, "style_distance": after, "style_gap_closed": gap_closed(after, before)}
 
@@ -443,7 +449,7 @@ def _flips(args) -> dict:
     from isu_validate.sut import build_request, open_sut
     from style_transfer.preservation import answer_flips
     space = load_space(args.space)
-    sut = open_sut(args.sut, space=space)
+    sut = open_sut(args.sut, space=space, device=args.device)
     # the scene comes out of the run's label (scene.json) through the one pairs reader
     samples = [(s.scene(), s.sim, s.nst) for s in PairsDir(args.pairs).samples()
                if s.scene_file.is_file() and s.sim.is_file() and s.nst.is_file()]
@@ -464,7 +470,8 @@ def _train(args) -> int:
     cfg = _train_config(args, FastTrainConfig())
     contents = expand_images([str(args.content)])
     report = train_fast(style_paths(args.style), contents, args.out, cfg, resume=not args.no_resume,
-                        progress=_train_progress)
+                        progress=_train_progress, device=args.torch_device.name)
     print(json.dumps({"model": str(args.out), "steps": report.steps_done, "final_loss": report.final_loss,
-                      "seconds": round(report.seconds, 1), "content_images": len(contents)}, indent=2))
+                      "seconds": round(report.seconds, 1), "content_images": len(contents),
+                      "device": args.torch_device.describe()}, indent=2))
     return 0

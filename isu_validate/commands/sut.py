@@ -16,6 +16,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ..devices import add_device_argument
 from ..errors import InputError, InputNotFound
 from ..sut.prompt import DEFAULT_PROMPT_STYLE, PROMPT_STYLES
 
@@ -52,6 +53,7 @@ def register(sub) -> None:
                        help="wording of the VQA prompt: paper (the paper's Figure 2, default) or compact (earlier)")
     check.add_argument("--repeats", type=int, default=1, help="ask K times, majority vote per feature")
     check.add_argument("--timeout", type=float, default=60.0, help="seconds per request (default: %(default)s)")
+    add_device_argument(check)   # the embedded reference ISU's backbone
     check.add_argument("--sut-option", action="append", default=[], metavar="NAME=VALUE",
                        help="adapter option, e.g. api_key_env=MY_KEY, rpm=30, json_mode=off (repeatable)")
     check.add_argument("--cache-dir", type=Path, help="reuse/record replies here (default: no cache)")
@@ -105,7 +107,7 @@ def check_command(args) -> int:
     else:
         request = build_request(space, {}, args.image, "vc", args.prompt)
     sut = open_sut(args.sut, space=space, repeats=args.repeats, cache_dir=args.cache_dir, timeout_s=args.timeout,
-                   **parse_options(args.sut_option))
+                   device=args.device, **parse_options(args.sut_option))
     try:
         response = sut.query(request)
     finally:

@@ -71,7 +71,7 @@ def build_dataset(settings: DatasetSettings, out: str | Path, resume: bool = Fal
     info["focus"] = _focus_info(settings, plan, runs)
     config = ImageConfig(str(folder.path), settings.space, settings.preset, settings.camera, settings.extrinsics_from,
                          settings.cabin, render_threads(settings.workers), tuple(styles), settings.seed,
-                         settings.renderer_factory)
+                         settings.renderer_factory, settings.render_device, settings.device)
     entries = folder.entries() if resume else {}
     start, made_now = time.monotonic(), 0
     if _usable(entries) < settings.n and len(entries) < plan.limit:   # else: a complete dataset, written again

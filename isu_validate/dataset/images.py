@@ -36,6 +36,8 @@ class ImageConfig:
     styles: tuple[StyleSpec, ...] = ()
     style_seed: int = 0
     renderer_factory: str = ""   # module:function(space) -> renderer; empty: Blender
+    render_device: str = "auto"  # Cycles' compute device
+    device: str = "auto"         # the style transfer's torch device
 
 
 @dataclass(frozen=True)
@@ -58,7 +60,7 @@ class ImageMaker:
         self.stylist = None
         if config.styles:
             from .styles import Stylist
-            self.stylist = Stylist(config.styles, config.threads or os.cpu_count() or 1)
+            self.stylist = Stylist(config.styles, config.threads or os.cpu_count() or 1, config.device)
 
     def make(self, job: SlotJob) -> dict:
         """The slot's manifest entry: ``status`` "ok" with its files, or "skipped" with the reason."""
@@ -126,7 +128,7 @@ def _renderer(config: ImageConfig, space):
     preset = (get_preset(config.preset, threads=config.threads) if isinstance(config.preset, str)
               else replace(config.preset, threads=config.threads))
     return open_renderer(preset, config.camera, config.cabin, ("seg",), None, Path(config.out) / LOGS_DIR,
-                         space=space, extrinsics_from=config.extrinsics_from)
+                         space=space, extrinsics_from=config.extrinsics_from, device=config.render_device)
 
 
 # ---- the Task: one ImageMaker per process and configuration, as pipeline.py keeps one Pipeline

@@ -15,7 +15,7 @@ from ..errors import InputError
 FOCUS_MODES = ("failing", "passing")
 RULE_PREFIX = "rule:"
 # how the work is spread: may change between a start and its --resume
-NOT_IDENTITY = ("workers", "cluster")
+NOT_IDENTITY = ("workers", "cluster", "render_device", "device")   # how the work is done: a resume may change them
 
 
 @dataclass(frozen=True)
@@ -47,6 +47,8 @@ class DatasetSettings:
     renderer_factory: str = ""
     workers: int = 1
     cluster: str | None = None
+    render_device: str = "auto"   # Cycles' compute device (render/gpu.py)
+    device: str = "auto"          # where the style transfer's torch work runs (devices.py)
     inputs: dict = field(default_factory=dict, compare=False)   # digests of runs and style files (identity)
 
     def check(self) -> DatasetSettings:

@@ -65,12 +65,15 @@ def _model_style(model: str) -> str:
 class Stylist:
     """The style transfers of one worker process: VGG19 and the nets loaded once."""
 
-    def __init__(self, specs: Sequence[StyleSpec], threads: int):
+    def __init__(self, specs: Sequence[StyleSpec], threads: int, device: str = "auto"):
         import torch
 
         from style_transfer.imageio import load_image
 
+        from ..devices import resolve_torch_device
+
         torch.set_num_threads(max(1, threads))
+        self.device = resolve_torch_device(device)   # where VGG and the nets run
         self.specs = list(specs)
         self._vgg = None
         self._style_images = {}
@@ -78,7 +81,7 @@ class Stylist:
         for spec in self.specs:
             if spec.method == "fast":
                 from style_transfer import load_model
-                self._nets[spec.image] = load_model(Path(spec.model))[0]
+                self._nets[spec.image] = load_model(Path(spec.model))[0].to(self.device.name)
             else:
                 self._style_images[spec.image] = load_image(spec.image, spec.size)
 
@@ -107,5 +110,5 @@ class Stylist:
     def vgg(self):
         if self._vgg is None:
             from style_transfer import VGG19
-            self._vgg = VGG19("avg")
+            self._vgg = VGG19("avg").to(self.device.name)
         return self._vgg

@@ -25,6 +25,9 @@ from ..errors import InputNotFound
 
 _lock = threading.Lock()
 _model: "MiniLM | None" = None
+# The judge stays on the CPU whatever ``--device`` says: one caption pair per scene (0.09 s) gains nothing
+# from a GPU's start-up and copies, and a run's F_emb/BERTScore, which decide its failures, then do not
+# depend on the desk it ran on.
 # Captions are a few dozen tokens: spreading one forward pass over several threads costs
 # more than it gains, badly so on a shared machine (measured on 2 busy cores: F_emb 0.50 s
 # with 2 threads, 0.09 s with 1).  Scenes are evaluated in parallel processes instead.

@@ -11,6 +11,7 @@ from typing import Callable, Sequence
 import numpy as np
 import torch
 
+from ..devices import TorchDevice, resolve_torch_device
 from . import inception
 from .cache import FeatureCache, content_key
 from .images import read_rgb
@@ -43,17 +44,24 @@ def stderr_progress(label: str) -> Progress:
 
 
 class FeatureExtractor:
-    """Loads the network lazily, so cache-only runs never pay for it."""
+    """Loads the network lazily, so cache-only runs never pay for it. ``device``: where the network runs
+    (``devices.py``); a GPU's features are cached apart from the CPU's, which stay valid (how far they
+    differ was not measured: no GPU was available)."""
 
     def __init__(self, weights: Path | None = None, resize_filter: str = DEFAULT_FILTER,
-                 batch_size: int = 8, cache: Path | None = None, device: str = "cpu"):
+                 batch_size: int = 8, cache: Path | None = None, device: str | TorchDevice = "cpu"):
         self.weights = Path(weights) if weights else inception.weights_path()
         self.settings = FeatureSettings(weights_sha1=inception.file_sha1(self.weights),
                                         resize_filter=resize_filter)
         self.batch_size = max(1, int(batch_size))
-        self.device = device
-        self.cache = FeatureCache(cache, self.settings.fingerprint(), inception.FEATURE_DIM) if cache else None
+        self.device = resolve_torch_device(device)
+        fingerprint = self.settings.fingerprint() + ("" if self.device.is_cpu else "-" + self.device.name.split(":")[0])
+        self.cache = FeatureCache(cache, fingerprint, inception.FEATURE_DIM) if cache else None
         self._model = None
+
+    def report_settings(self) -> dict:
+        """The feature settings every FID/KID result carries, with the device that computed them."""
+        return {**asdict(self.settings), "device": self.device.describe()}
 
     def features(self, paths: Sequence[Path], progress: Progress | None = None) -> np.ndarray:
         """(n, 2048) float64 features, in the order of ``paths``."""
@@ -84,11 +92,11 @@ class FeatureExtractor:
         size = self.settings.input_size
         batch = np.stack([resize_rgb(img, size, self.settings.resize_filter) for img in images])
         with torch.inference_mode():
-            x = inception.to_model_input(torch.from_numpy(batch).to(self.device))
+            x = inception.to_model_input(torch.from_numpy(batch).to(self.device.name))
             feats = self.model()(x)
         return feats.double().cpu().numpy()
 
     def model(self):
         if self._model is None:
-            self._model = inception.load_inception(self.weights, self.device)
+            self._model = inception.load_inception(self.weights, self.device.name)
         return self._model

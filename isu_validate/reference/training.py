@@ -152,11 +152,12 @@ def accuracy(space: SceneSpace, heads: list[Head], X: np.ndarray, scenes: list[d
 def train_reference(space: SceneSpace, renderer, out: Path, workdir: Path, n_train: int, n_test: int,
                     seed: int, preset: str, backbone: Backbone | None = None,
                     other_presets: Mapping[str, int] | None = None,
-                    renderer_for: Callable[[str], object] | None = None, renderer_version: str = "") -> dict:
+                    renderer_for: Callable[[str], object] | None = None, renderer_version: str = "",
+                    device: str = "auto") -> dict:
     """Render, embed, fit and write the heads, the model card and the features of both sets (so that
     ``reference train --extra`` never renders them again). ``other_presets`` maps a preset name to how
     many of the held-out scenes to render at it as well (``renderer_for(name)`` opens a renderer for
-    it, closed here)."""
+    it, closed here). ``device``: where the backbone runs (``devices.py``), named in the card."""
     start = time.time()
     train_scenes = balanced_scenes(space, n_train, np.random.default_rng(seed))
     test_scenes = balanced_scenes(space, n_test, np.random.default_rng(seed + 10_000))
@@ -164,14 +165,14 @@ def train_reference(space: SceneSpace, renderer, out: Path, workdir: Path, n_tra
     test = render_examples(space, test_scenes, renderer, workdir / "held-out", "held-out set")
     others = {name: _render_at(name, space, test_scenes[:n], renderer_for, workdir)
               for name, n in (other_presets or {}).items() if name != preset}
-    backbone = backbone or Backbone()
+    backbone = backbone or Backbone(device=device)
     made_with = {"space": space.name, "space_hash": space.hash, "renderer": renderer_version, "preset": preset,
                  "backbone": backbone.name, "input_size": list(backbone.size), "seed": seed}
     bank = [FeatureSet(embed(backbone, part), [e.scene for e in part], dict(made_with, scenes_seed=scenes_seed))
             for part, scenes_seed in ((train, seed), (test, seed + 10_000))]
     heads, card = fit_and_describe(space, bank[0], bank[1], seed, {
         name: (embed(backbone, examples), [e.scene for e in examples]) for name, examples in others.items()})
-    card.update({"render_preset": preset, "renderer": renderer_version,
+    card.update({"render_preset": preset, "renderer": renderer_version, "device": backbone.device.describe(),
                  "train_seconds": round(time.time() - start, 1)})
     write_model(out, heads, card, bank)
     return card
@@ -224,7 +225,8 @@ def model_card_markdown(card: dict) -> str:
     lines = ["# Reference ISU: model card", "",
              "A small, real in-car scene understanding system shipped with isu-validate so that runs work offline.",
              "It is imperfect in honest ways: the accuracies below are measured, not planted.", "",
-             f"- Backbone: {card['backbone']}, input {card['input_size'][0]}x{card['input_size'][1]}",
+             f"- Backbone: {card['backbone']}, input {card['input_size'][0]}x{card['input_size'][1]}"
+             + (f", run on {card['device']}" if card.get("device") else ""),
              "- Heads: one L2-regularised logistic regression per predicted feature (scikit-learn), "
              "stored as plain arrays",
              f"- Scene space: {card['space']} (hash {card['space_hash']})",

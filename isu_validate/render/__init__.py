@@ -25,19 +25,21 @@ def open_renderer(preset: "str | Preset" = "draft", camera: str | os.PathLike | 
                   cache_dir: str | os.PathLike | None = None, log_dir: str | os.PathLike | None = None,
                   timeout_s: float = 240.0, space=None, threads: int = 0,
                   extrinsics_from: str | os.PathLike | Camera | None = None,
-                  min_visible: Mapping[str, float] | None = None) -> BlenderRenderer:
+                  min_visible: Mapping[str, float] | None = None, device: str | None = "auto") -> BlenderRenderer:
     """A renderer for one process. Its Blender worker starts on the first render (each process of a
     pool gets its own); ``close()`` stops it. ``channels``: any of "seg", "depth", "exr".
 
     A camera file whose pose was never registered is refused (CameraFileError) unless
     ``extrinsics_from`` names a registered rig to take the pose from. ``min_visible`` overrides the
-    space's per-feature visibility thresholds ({feature or "*": share}).
+    space's per-feature visibility thresholds ({feature or "*": share}). ``device``: Cycles' compute device,
+    ``auto|cpu|optix|cuda|hip|oneapi|metal`` (``render/gpu.py``; None keeps a ``Preset``'s own); an absent
+    GPU falls back to the CPU with one line on stderr.
 
         with open_renderer(preset="draft", space=space) as renderer:      # one warm worker, many scenes
             frame = renderer.render(scene, "scene.png")   # frame.image, frame.visibility, frame.occluded
     """
     return BlenderRenderer(preset, camera, cabin, channels, cache_dir, log_dir, timeout_s, space, threads,
-                           extrinsics_from, min_visible)
+                           extrinsics_from, min_visible, device=device)
 
 
 def render_board(image_path: str | os.PathLike, board_size_m: tuple[float, float], pose, out: str | os.PathLike,

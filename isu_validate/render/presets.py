@@ -19,6 +19,7 @@ class Preset:
     clamp_indirect: float   # firefly clamp (0 = off)
     filter_width: float     # pixel filter (px)
     threads: int = 0        # 0 = all cores
+    device: str = "cpu"     # Cycles' compute device: cpu or a GPU type (render/gpu.py resolves auto)
 
     def to_worker(self) -> dict:
         d = asdict(self)

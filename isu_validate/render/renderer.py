@@ -8,8 +8,10 @@ import hashlib
 import json
 import os
 import shutil
+import sys
 import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -23,6 +25,7 @@ from .cabin import cabin_hash, load_cabin
 from .cache import RenderCache
 from .camera import pinhole_plan
 from .frame_check import frame_problem, frame_stats
+from .gpu import device_identity, resolve_render_device
 from .outputs import channel_paths, footprint_pixels, parse_channels, write_outputs
 from .people import People, PeopleStore
 from .people.store import code_version as people_version
@@ -49,8 +52,10 @@ class BlenderRenderer:
                  cabin: str | os.PathLike | dict = "default", channels=(), cache_dir=None, log_dir=None,
                  timeout_s: float = 240.0, space: SceneSpace | str | None = None, threads: int = 0,
                  extrinsics_from: str | os.PathLike | Camera | None = None, min_visible=None,
-                 people_cache: str | os.PathLike | None = None):
+                 people_cache: str | os.PathLike | None = None, device: str | None = "auto"):
         self.preset = get_preset(preset, threads=threads) if isinstance(preset, str) else preset
+        if device is not None:   # None keeps a Preset's own device (a pool's copy of a resolved one)
+            self.preset = replace(self.preset, device=resolve_render_device(device))
         self.rig = load_render_camera(camera, extrinsics_from)   # refuses an unregistered pose
         self.render_rig = self.rig.scaled(self.preset.scale)
         self.plan = pinhole_plan(self.render_rig)
@@ -71,11 +76,17 @@ class BlenderRenderer:
         self.people = People(self.cabin, PeopleStore(people_cache) if people_cache else None)
         self.show_people = True     # False renders the cabin without driver and child (bench render's people cost)
         self.imaging = self.rig.imaging       # the camera's imaging model; None = linear light as sRGB
+        self._identity = self._identity_hash()
+        self._device_confirmed = False
+
+    def _identity_hash(self) -> str:
+        settings = self.preset.to_worker()
+        device = settings.pop("device")
         identity = [RENDERER_VERSION, people_version(), self.render_rig.hash, cabin_hash(self.cabin),
-                    self.preset.to_worker(), self.preset.scale, self.channels, self.parts]
+                    settings, self.preset.scale, self.channels, self.parts, *device_identity(device)]
         if self.imaging is not None:          # a camera without a model keeps its cache keys
             identity.append(self.imaging.hash)
-        self._identity = hashlib.sha256(json.dumps(identity, sort_keys=True).encode()).hexdigest()
+        return hashlib.sha256(json.dumps(identity, sort_keys=True).encode()).hexdigest()
 
     # ------------------------------------------------------------------ protocol
     def render(self, scene: Mapping[str, Any], out: Path) -> RenderResult:
@@ -86,9 +97,8 @@ class BlenderRenderer:
         t0 = time.perf_counter()
         out = Path(out)
         canonical = self.space.check(scene)
-        key = self.cache_key(canonical)
         developed: dict = {}
-        paths, visible, parts, timings, cached = self._frame(canonical, key, out, developed)
+        paths, visible, parts, timings, cached, key = self._frame(canonical, out, developed)
         timings["total_s"] = time.perf_counter() - t0
         shares, occluded = feature_visibility(self.space, canonical, parts, self.min_visible)
         frame = frame_stats(out)
@@ -104,11 +114,13 @@ class BlenderRenderer:
         return RenderResult(out, {**paths, "label": label}, timings, cached=cached, visibility=shares,
                             occluded=occluded)
 
-    def _frame(self, canonical: dict, key: str, out: Path, developed: dict):
-        """(files by channel, visible instances, part shares, timings, cached): from the cache when it
-        holds the scene, else rendered and put there. ``developed`` receives what the camera's imaging
+    def _frame(self, canonical: dict, out: Path, developed: dict):
+        """(files by channel, visible instances, part shares, timings, cached, cache key): from the cache
+        when it holds the scene, else rendered and put there (under the key of the device that renders it: a
+        GPU that falls back to the CPU renders CPU pixels). ``developed`` receives what the camera's imaging
         model chose (exposure time, gain, metered level)."""
         t0 = time.perf_counter()
+        key = self.cache_key(canonical)
         try:
             hit = self.cache.get(key, out, channel_paths(out)) if self.cache else None
         except OSError as exc:   # the output cannot be written (the cached files are intact)
@@ -116,7 +128,9 @@ class BlenderRenderer:
         if hit:
             timings = {"update_s": 0.0, "render_s": 0.0, "write_s": time.perf_counter() - t0}
             developed["exposure"] = hit["meta"].get("exposure")
-            return hit["channels"], hit["meta"]["visible"], hit["meta"]["parts"], timings, True
+            return hit["channels"], hit["meta"]["visible"], hit["meta"]["parts"], timings, True, key
+        if self._confirm_device():   # the GPU is absent: the CPU's cache may hold the scene
+            return self._frame(canonical, out, developed)
         paths, visible, footprints, timings = self._render_with_retry({**DEFAULTS, **canonical}, out, {},
                                                                       tag=key[:12], parts=self.parts,
                                                                       developed=developed)
@@ -124,7 +138,7 @@ class BlenderRenderer:
         if self.cache:
             self.cache.put(key, out, paths, {"scene": canonical, "visible": visible, "parts": parts,
                                              "timings": timings, "exposure": developed.get("exposure")})
-        return paths, visible, parts, timings, False
+        return paths, visible, parts, timings, False, key
 
     def close(self) -> None:
         if self._worker is not None and os.getpid() == self._owner:
@@ -214,6 +228,7 @@ class BlenderRenderer:
         reply = worker.request({"op": "render", "features": features, "camera": camera, "extras": extras,
                                 "people": people, "preset": self.preset.to_worker(), "exr": str(exr), "tag": tag,
                                 "footprints": parts, "footprint_file": str(masks)}, self.timeout_s)
+        self._note_device(reply)
         t = time.perf_counter()
         try:
             paths, visible = write_outputs(exr, self.plan, out, self.channels,
@@ -229,6 +244,28 @@ class BlenderRenderer:
         if parts:
             timings["footprint_s"] = reply["footprint_s"]
         return paths, visible, footprints, timings
+
+    def _confirm_device(self) -> bool:
+        """Before the first GPU frame: ask the worker whether Blender has the device; True when it fell back."""
+        if self.preset.device == "cpu" or self._device_confirmed:
+            return False
+        try:
+            reply = self._ensure_worker().request({"op": "device", "device": self.preset.device}, self.timeout_s)
+        except (WorkerCrashed, WorkerTimeout, WorkerFailed) as exc:
+            raise RenderError(f"Blender could not select render device {self.preset.device}: {exc} "
+                              f"(log: {self.log_path})") from exc
+        self._device_confirmed = True
+        return self._note_device(reply)
+
+    def _note_device(self, reply: dict) -> bool:
+        """The worker fell back to the CPU: say so once, and key frames as the CPU's from now on."""
+        used = reply.get("device", self.preset.device)
+        if used == self.preset.device:
+            return False
+        print(reply.get("device_note") or f"warning: Cycles renders on the {used}", file=sys.stderr, flush=True)
+        self.preset = replace(self.preset, device=used)
+        self._identity = self._identity_hash()
+        return True
 
     def _people_for(self, features: dict, extras: dict) -> dict:
         """The host's posed driver and child files for the worker (None: absent)."""
@@ -251,6 +288,7 @@ class BlenderRenderer:
 
     def _write_label(self, path: Path, canonical: dict, key: str, cached: bool, timings: dict, seen: dict):
         label = {"scene": canonical, "space": self.space.name, "preset": self.preset.name,
+                 "render_device": self.preset.device,
                  "renderer": RENDERER_VERSION, "cache_key": key, "cached": cached,
                  "camera": self.render_rig.geometry(), "camera_source": self.rig.source,
                  "extrinsics_from": self.rig.pose_source or None,

@@ -44,6 +44,7 @@ class ReplaySettings:
     repeats: int | None = None          # None: the run's
     sut_timeout_s: float | None = None  # None: the run's
     stop_after_sut_errors: int = DEFAULT_SUT_ERROR_LIMIT   # SUT errors in a row, no answer between; 0 never
+    device: str = "auto"                # an embedded SUT's torch work (devices.py)
 
 
 @dataclass
@@ -149,7 +150,7 @@ def _open_sut(stored: StoredRun, settings: ReplaySettings, out: Path):
     repeats = pipeline.repeats if settings.repeats is None else settings.repeats
     timeout = pipeline.sut_timeout_s if settings.sut_timeout_s is None else settings.sut_timeout_s
     return open_sut(settings.sut, space=stored.space, repeats=repeats, cache_dir=out / "cache" / "sut",
-                    timeout_s=timeout, **settings.sut_options)
+                    timeout_s=timeout, device=settings.device, **settings.sut_options)
 
 
 def _replay(stored: StoredRun, sut, frames: dict, threshold: float, limit: int,
@@ -198,7 +199,8 @@ def _settings(stored: StoredRun, settings: ReplaySettings, sut) -> dict:
             "run": str(stored.path), "run_sut": pipeline.sut, "run_sut_options": pipeline.sut_options,
             "sut_fingerprint": sut.adapter.fingerprint, "sut_version": sut_version(settings.sut, sut.adapter),
             "mode": "vqa", "space": stored.space.name,
-            "space_hash": stored.space_hash, "prompt_style": pipeline.prompt_style}
+            "space_hash": stored.space_hash, "prompt_style": pipeline.prompt_style,
+            "sut_device": getattr(sut.adapter, "device", None)}   # None: the SUT runs elsewhere
 
 
 def _write(out: Path, summary: dict, table: list[dict]) -> None:

@@ -32,6 +32,7 @@ USAGE = {"reference": "reference", "openai": "openai:MODEL@BASE_URL", "command":
          "http": "http:URL", "bench": "bench:NAME"}
 # Factories that want the scene space (the reference ISU's heads are per feature).
 NEEDS_SPACE = {"reference", "bench"}
+NEEDS_DEVICE = {"reference"}   # adapters that run torch here: they take the one --device setting
 
 
 def register_adapter(scheme: str, factory: Callable[..., Any], *, needs_space: bool = False) -> None:
@@ -49,9 +50,10 @@ def split_spec(spec: str) -> tuple[str, str]:
 
 
 def open_sut(spec: str, *, space: SceneSpace, repeats: int = 1, cache_dir: str | os.PathLike | None = None,
-             timeout_s: float = 60.0, **options: Any) -> RepeatingSUT:
+             timeout_s: float = 60.0, device: str = "auto", **options: Any) -> RepeatingSUT:
     """The SUT for ``spec``, asked ``repeats`` times per scene (majority vote), replies cached under
-    ``cache_dir`` (none when None).  Raises SUTConfigError naming the problem and the fix.
+    ``cache_dir`` (none when None); ``device``: where an embedded SUT's torch work runs (``devices.py``).
+    Raises SUTConfigError naming the problem and the fix.
 
         with open_sut("reference", space=space) as sut:       # or "openai:gpt-4o@https://api.openai.com/v1"
             response = sut.query(build_request(space, scene, "scene.png", "vqa"))
@@ -63,6 +65,8 @@ def open_sut(spec: str, *, space: SceneSpace, repeats: int = 1, cache_dir: str |
     if timeout_s <= 0:
         raise SUTConfigError(f"SUT timeout must be positive, got {timeout_s}")
     extra = {"space": space} if scheme in NEEDS_SPACE else {}
+    if scheme in NEEDS_DEVICE:
+        extra["device"] = device
     adapter = ADAPTERS[scheme](target, timeout_s=timeout_s, **extra, **options)
     cache = ResponseCache(cache_dir) if cache_dir is not None else None
     return RepeatingSUT(adapter, repeats=int(repeats), cache=cache)

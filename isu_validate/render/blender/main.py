@@ -38,6 +38,10 @@ def main() -> int:
             elif op == "bounds":
                 studio.apply(request["features"], request.get("extras", {}), request.get("people", {}))
                 reply = {"bounds": studio.bounds()}
+            elif op == "device":   # which device Blender renders on, asked before the first GPU frame
+                from .device import select_device
+                used, note = select_device(studio.scene, request["device"])
+                reply = {"device": used, "device_note": note}
             elif op == "ping":
                 reply = {}
             else:
@@ -64,7 +68,8 @@ def _render(studio, request: dict) -> dict:
         times.update(write_footprints(studio.scene, request["footprints"], request["camera"],
                                       request["footprint_file"]))
     # CPU seconds of all render threads: a contention-free measure of the work a frame takes
-    return {"update_s": update_s, **times, "cpu_s": time.process_time() - cpu}
+    return {"update_s": update_s, **times, "cpu_s": time.process_time() - cpu, "device": studio.device,
+            "device_note": studio.device_note}
 
 
 if __name__ == "__main__":

@@ -12,6 +12,7 @@ from mathutils import Matrix, Vector
 
 from ..labels import INSTANCE_ID
 from .cabin import build_cabin
+from .device import select_device
 from .lighting import Lighting
 from .objects import Group, Objects
 from .people import Child, Driver
@@ -36,6 +37,7 @@ class Studio:
         self._passes()
         self.board: Group | None = None
         self.preset_key = None
+        self.device, self.device_note = "cpu", None   # what set_preset chose, and why not the asked one
 
     # ------------------------------------------------------------------ setup
     def _camera(self):
@@ -64,7 +66,7 @@ class Studio:
             return
         r, c = self.scene.render, self.scene.cycles
         r.engine = "CYCLES"
-        c.device = "CPU"
+        self.device, self.device_note = select_device(self.scene, p.get("device", "cpu"))
         c.samples = p["samples"]
         c.use_adaptive_sampling = False
         c.use_denoising = p["denoise"]

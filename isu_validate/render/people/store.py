@@ -6,7 +6,12 @@ the source of the modules that decide it, ``CONTENT_MODULES``, so a changed pose
 back from an old cache), anny's version, the parts of the cabin rig the pose depends on, and the inputs
 (gender, classes, expression, phone position...). Entries are written to a temporary file and renamed into place, so
 the processes of a pool can share the folder. It lives beside anny's model cache (``ANNY_CACHE_DIR``,
-default ``<sys.prefix>/share/anny``) in ``isu-validate-people/``; ``ISU_PEOPLE_CACHE`` moves it."""
+default ``<sys.prefix>/share/anny``) in ``isu-validate-people/``; ``ISU_PEOPLE_CACHE`` moves it.
+
+Posing (anny, torch) stays on the CPU whatever ``--device`` says: a body of a few thousand vertices, posed
+once and kept here; a GPU's start-up and copies would cost more than the work, and the cached vertices, part
+of every render, stay the same on every desk. (Said here: a comment in a ``CONTENT_MODULES`` file would
+change every cache key.)"""
 from __future__ import annotations
 
 import hashlib
