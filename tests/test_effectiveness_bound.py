@@ -100,8 +100,10 @@ def test_the_bound_is_measured_on_the_searches_clusters_without_moving_them():
         assert both.diversity[algo] == alone.diversity[algo]
     assert both.entropy_gaps["surrogate"] == alone.entropy_gaps["surrogate"]
     assert np.isfinite(both.diversity["bound"]["entropy mean"]) and len(both.entropy_gaps["bound"]) == 5
-    pooled = summarize(SPACE, sut.name, "", runs + bound, "rs", 4)   # the bound in the fit moves the clusters
-    assert pooled.entropy_gaps["surrogate"] != alone.entropy_gaps["surrogate"]
+    # Not asserted: that pooling the bound into the fit moves these clusters. Here it does not (the same
+    # partition); the old `!=` on the entropy gaps held only through summation-order noise at 1e-16, which
+    # another BLAS or an exactly rounded entropy removes. That failures outside the fit take the nearest
+    # centre of the others' fit is the next test.
 
 
 def test_failures_outside_the_fit_take_their_nearest_centre():
