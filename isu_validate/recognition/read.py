@@ -29,6 +29,7 @@ class Yardsticks:
 def read_frame(frame: Frame, models: Yardsticks) -> tuple[dict, list[tuple[np.ndarray, str]]]:
     """The frame's record (``frames.jsonl``) and its (crop, caption) pairs for the contact sheet."""
     rgb = read_image(frame.image)
+    boxes = frame.boxes_for(rgb.shape[1], rgb.shape[0])
     record = {"name": frame.name, "image": str(frame.image), "kind": frame.kind, "preset": frame.preset,
               **frame.light(), "size": [int(rgb.shape[1]), int(rgb.shape[0])], "own_boxes": frame.own_boxes,
               "items": []}
@@ -38,7 +39,7 @@ def read_frame(frame: Frame, models: Yardsticks) -> tuple[dict, list[tuple[np.nd
     objects = []
     for unit, status in frame.units():
         item = {"feature": unit.name, "instance": unit.instance, "status": status,
-                "box": list(frame.boxes[unit.instance]) if unit.instance in frame.boxes else None}
+                "box": list(boxes[unit.instance]) if unit.instance in boxes else None}
         if unit.name == "face":
             item["emotion"] = frame.scene.get("driver_emotion")
         record["items"].append(item)

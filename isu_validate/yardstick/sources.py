@@ -89,9 +89,11 @@ def _pairs_frames(pairs: PairsDir) -> list[Frame]:
         if sim is not None:
             frames.append(sim)
         base = sim or _label_frame(sample.sim, label, sample.name)
+        size = (label.get("camera") or {}).get("image") or {}   # the rendered size the sim boxes are in
         for real in sample.real_frames():
             frames.append(Frame(real, f"{sample.name}/{real.stem}", "stand-in" if is_stand_in(real) else "real",
-                                base.preset, base.scene, base.boxes, base.occluded, own_boxes=False))
+                                base.preset, base.scene, base.boxes, base.occluded, own_boxes=False,
+                                boxes_size=(size["width"], size["height"]) if "width" in size else None))
     if not frames:
         raise InputError(f"pairs folder {pairs.root} has no sim.png and no real frames")
     return frames
