@@ -68,6 +68,8 @@ def recognise(settings: RecogniseSettings, out: Path, device, stream=sys.stderr)
     models = Yardsticks.load(device.name)
     load_s = time.perf_counter() - started
     out.mkdir(parents=True, exist_ok=True)
+    # the marker first: an interrupted measurement (a corrupt frame, ^C) is this command's, so it may be redone
+    write_json(out / SUMMARY, {"format": FORMAT, "settings": settings.as_dict(), "complete": False}, indent=1)
     records, crops = _read_all(frames, models, out, stream)
     read_s = time.perf_counter() - started - load_s
     summary = _summary(settings, sources, records, models, device, load_s, read_s)
@@ -97,7 +99,7 @@ def _read_all(frames: list[Frame], models: Yardsticks, out: Path, stream):
 def _summary(settings, sources, records, models, device, load_s, read_s) -> dict:
     kinds = {k: sum(r["kind"] == k for r in records) for k in KINDS}
     return {
-        "format": FORMAT, "settings": settings.as_dict(), "sources": sources, "device": device.describe(),
+        "format": FORMAT, "settings": settings.as_dict(), "complete": True, "sources": sources, "device": device.describe(),
         "models": models.describe(), "plausible_classes": {k: list(v) for k, v in PLAUSIBLE.items()},
         "frames": {"total": len(records), **kinds, "stand_in_frames": kinds["stand-in"],
                    "real_frames": kinds["real"]},
