@@ -99,7 +99,8 @@ def _read_all(frames: list[Frame], models: Yardsticks, out: Path, stream):
 def _summary(settings, sources, records, models, device, load_s, read_s) -> dict:
     kinds = {k: sum(r["kind"] == k for r in records) for k in KINDS}
     return {
-        "format": FORMAT, "settings": settings.as_dict(), "complete": True, "sources": sources, "device": device.describe(),
+        "format": FORMAT, "settings": settings.as_dict(), "complete": True, "sources": sources,
+        "device": device.describe(),
         "models": models.describe(), "plausible_classes": {k: list(v) for k, v in PLAUSIBLE.items()},
         "frames": {"total": len(records), **kinds, "stand_in_frames": kinds["stand-in"],
                    "real_frames": kinds["real"]},
