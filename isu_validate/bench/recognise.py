@@ -2,8 +2,8 @@
 dataset's own cost record) against the rates at which models trained on real photographs recognise what
 the frames show (``isu-validate recognise``).
 
-Renders a seeded dataset per preset into OUT/<preset> (the same scenes at every preset), or takes finished
-datasets with ``--datasets`` (their preset read from each)."""
+Renders a seeded dataset per preset into OUT/<preset> (the same scenes at every preset), or takes datasets
+with ``--datasets`` (their preset read from each; an unfinished one counts the images it has)."""
 from __future__ import annotations
 
 import json
@@ -63,26 +63,32 @@ def _render(args, preset: str) -> Path:
 
 
 def _measure(folder: Path, out: Path, device) -> dict:
+    from isu_validate.dataset.card import costs
     from isu_validate.dataset.folder import open_dataset
     from isu_validate.yardstick.measure import RecogniseSettings, recognise
 
-    info = open_dataset(folder).info()
-    preset = info["preset"]["name"]
+    dataset = open_dataset(folder)
+    preset = dataset.info()["preset"]["name"]
+    # the dataset's own per-image timings (an unfinished dataset counts the images it has); CPU-seconds too,
+    # since wall seconds on a shared machine measure the neighbours as much as the preset
+    cost = costs([e for e in dataset.entries().values() if e.get("status") == "ok"], 0.0, 0)
     summary = recognise(RecogniseSettings((str(folder.resolve()),)), out / f"{preset}-recognise", device)
     rates = {r["measure"]: r for r in summary["rows"] if r["split"] == "all" and r["kind"] == "render"}
     return {"preset": preset, "dataset": str(folder), "frames": summary["frames"]["render"],
-            "render_s_per_frame": (info.get("costs") or {}).get("render_s_per_image"),
+            "render_s_per_frame": cost["render_s_per_image"], "render_cpu_s_per_frame": cost["cpu_s_per_image"],
             "recognise_s_per_frame": summary["timing"]["per_frame_s"],
             "rates": {m: {k: rates[m][k] for k in ("rate", "hits", "n", "ci95")} for m in COLUMNS if m in rates}}
 
 
 def format_rows(rows: list[dict]) -> str:
-    head = f"{'preset':<10}{'render s/frame':>15}{'frames':>8}" + "".join(f"{c:>24}" for c in COLUMNS)
+    head = (f"{'preset':<10}{'render s/frame':>15}{'CPU-s/frame':>12}{'frames':>8}"
+            + "".join(f"{c:>24}" for c in COLUMNS))
     lines = [head]
     for row in rows:
-        s = row["render_s_per_frame"]
+        s, cpu = (f"{v:.2f}" if v is not None else "-"
+                  for v in (row["render_s_per_frame"], row["render_cpu_s_per_frame"]))
         cells = "".join(f"{_rate(row['rates'].get(c)):>24}" for c in COLUMNS)
-        lines.append(f"{row['preset']:<10}{(f'{s:.2f}' if s is not None else '-'):>15}{row['frames']:>8}{cells}")
+        lines.append(f"{row['preset']:<10}{s:>15}{cpu:>12}{row['frames']:>8}{cells}")
     return "\n".join(lines)
 
 
