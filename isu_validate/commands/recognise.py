@@ -58,6 +58,6 @@ def format_table(summary: dict, split: str = "all") -> str:
         lines.append(f"{r['measure']:<24}{r['kind']:<10}{r['value']:<14}{rate:>6}  {r['n']:>4}  {ci:<13}"
                      f"{r['occluded']:>8}")
     t = summary["timing"]
-    lines.append(f"{summary['frames']['total']} frames on {summary['device']}: {t['per_frame_s']} s/frame "
-                 f"(+{t['load_s']} s loading the models)")
+    lines.append(f"{summary['frames']['total']} frames on {summary['device']}: {t['per_frame_s']} s/frame, "
+                 f"{t.get('cpu_s_per_frame')} CPU-s/frame (+{t['load_s']} s loading the models)")
     return "\n".join(lines)
