@@ -77,6 +77,7 @@ def _measure(folder: Path, out: Path, device) -> dict:
     return {"preset": preset, "dataset": str(folder), "frames": summary["frames"]["render"],
             "render_s_per_frame": cost["render_s_per_image"], "render_cpu_s_per_frame": cost["cpu_s_per_image"],
             "recognise_s_per_frame": summary["timing"]["per_frame_s"],
+            "recognise_cpu_s_per_frame": summary["timing"]["cpu_s_per_frame"],
             "rates": {m: {k: rates[m][k] for k in ("rate", "hits", "n", "ci95")} for m in COLUMNS if m in rates}}
 
 
