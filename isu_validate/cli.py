@@ -27,6 +27,7 @@ COMMANDS = {
     "sut": ("sut", "systems under test: check that one answers"),
     "reference": ("reference", "the embedded reference ISU (train it)"),
     "realism": ("realism", "FID/KID between image sets (renders, stylised renders, real photos)"),
+    "recognise": ("recognise", "how recognisable renders are to photo-trained models (faces, expression, objects)"),
     "stylize": ("stylize", "neural style transfer of renders towards a real photo (or: stylize train)"),
     "capture": ("capture", "camera capture: list devices, shoot frames with exposure metadata"),
     "calibrate": ("calibrate", "calibrate a camera from ChArUco images (also: diff, register)"),

@@ -1,0 +1,115 @@
+"""``recognise``: every frame of the sources through the photo-trained yardsticks; rates, crops, report.
+
+Writes to OUT: ``summary.json`` (the contract, docs/ARCHITECTURE.md "Recognition folder"), ``frames.jsonl``
+(one record per frame: what each model said about each feature), ``sheet-<kind>.png`` (crops with what was
+said) and ``index.html``."""
+from __future__ import annotations
+
+import json
+import sys
+import time
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+from ..atomic import write_json, write_text
+from ..errors import InputError
+from ..progress import Progress
+from ..recognition.frames import KINDS, Frame
+from ..recognition.objects import PLAUSIBLE
+from ..recognition.read import Yardsticks, read_frame
+from ..recognition.tally import expression_summary, face_sizes, object_summary, rows
+from .sources import frames_of
+
+FORMAT = "isu-validate-recognise/1"
+SUMMARY, FRAMES = "summary.json", "frames.jsonl"
+SHEET_CROPS = 96     # crops per contact sheet: enough to see the pattern, small enough to open
+
+
+@dataclass(frozen=True)
+class RecogniseSettings:
+    sources: tuple[str, ...]
+    limit: int | None = None       # first N frames of each source (None: all)
+
+    def as_dict(self) -> dict:
+        return {"sources": list(self.sources), "limit": self.limit}
+
+
+def check_out(out: Path, settings: RecogniseSettings) -> None:
+    """Refuse a non-empty OUT unless it is this command's output with the same settings (then it is redone)."""
+    if not out.exists() or (out.is_dir() and not any(out.iterdir())):
+        return
+    if not out.is_dir():
+        raise InputError(f"--out {out} is a file: give a new or empty folder")
+    try:
+        stored = json.loads((out / SUMMARY).read_text())
+    except (OSError, ValueError):
+        stored = None
+    if not stored or stored.get("format") != FORMAT or stored.get("settings") != settings.as_dict():
+        raise InputError(f"--out {out} is not empty and is not `recognise` output of these sources: "
+                         "give a new or empty folder (nothing in it was changed)")
+
+
+def gather(settings: RecogniseSettings) -> tuple[list[dict], list[Frame]]:
+    described, frames = [], []
+    for i, raw in enumerate(settings.sources):
+        kind, found = frames_of(Path(raw))
+        found = found[: settings.limit] if settings.limit else found
+        prefix = f"{i}:" if len(settings.sources) > 1 else ""
+        frames += [replace(f, name=prefix + f.name) for f in found]
+        described.append({"path": str(Path(raw).resolve()), "kind": kind, "frames": len(found)})
+    return described, frames
+
+
+def recognise(settings: RecogniseSettings, out: Path, device, stream=sys.stderr) -> dict:
+    """Measure and write OUT; returns the summary. ``device`` is a resolved ``devices.TorchDevice``."""
+    check_out(out, settings)
+    sources, frames = gather(settings)
+    started = time.perf_counter()
+    models = Yardsticks.load(device.name)
+    load_s, cpu = time.perf_counter() - started, time.process_time()
+    out.mkdir(parents=True, exist_ok=True)
+    # the marker first: an interrupted measurement (a corrupt frame, ^C) is this command's, so it may be redone
+    write_json(out / SUMMARY, {"format": FORMAT, "settings": settings.as_dict(), "complete": False}, indent=1)
+    records, crops = _read_all(frames, models, out, stream)
+    read_s = time.perf_counter() - started - load_s
+    cpu_s = time.process_time() - cpu   # CPU-seconds too: on a shared machine wall time measures the neighbours
+    summary = _summary(settings, sources, records, models, device, load_s, read_s, cpu_s)
+    from .report import write_report, write_sheets
+    summary["sheets"] = write_sheets(crops, out)
+    write_json(out / SUMMARY, summary, indent=1)
+    write_text(out / "index.html", write_report(summary))
+    return summary
+
+
+def _read_all(frames: list[Frame], models: Yardsticks, out: Path, stream):
+    progress = Progress(len(frames), label="frames", stream=stream, verdicts=False)
+    records, crops = [], {k: [] for k in KINDS}
+    with open(out / FRAMES, "w") as f:
+        for frame in frames:
+            t = time.perf_counter()
+            record, said = read_frame(frame, models)
+            record["seconds"] = round(time.perf_counter() - t, 4)
+            f.write(json.dumps(record) + "\n")
+            records.append(record)
+            room = SHEET_CROPS - len(crops[frame.kind])
+            crops[frame.kind] += [(c, f"{frame.name} {s}") for c, s in said[:max(room, 0)]]
+            progress.update()
+    return records, crops
+
+
+def _summary(settings, sources, records, models, device, load_s, read_s, cpu_s) -> dict:
+    kinds = {k: sum(r["kind"] == k for r in records) for k in KINDS}
+    return {
+        "format": FORMAT, "settings": settings.as_dict(), "complete": True, "sources": sources,
+        "device": device.describe(),
+        "models": models.describe(), "plausible_classes": {k: list(v) for k, v in PLAUSIBLE.items()},
+        "frames": {"total": len(records), **kinds, "stand_in_frames": kinds["stand-in"],
+                   "real_frames": kinds["real"]},
+        "presets": sorted({str(r["preset"]) for r in records}),
+        "rows": rows(records), "expression": expression_summary(records),
+        "objects": object_summary(records), "face_width_px": face_sizes(records),
+        "timing": {"load_s": round(load_s, 2), "read_s": round(read_s, 2),
+                   "per_frame_s": round(read_s / len(records), 4) if records else None,
+                   "cpu_s": round(cpu_s, 2), "cpu_s_per_frame": round(cpu_s / len(records), 4) if records else None},
+        "files": {"frames": FRAMES, "report": "index.html"},
+    }
