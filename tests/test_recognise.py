@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 from skimage import data
 
+from isu_validate.archive.output_dir import OutputInUse
 from isu_validate.cli import main
 from isu_validate.devices import resolve_torch_device
 from isu_validate.errors import InputError
@@ -48,8 +49,9 @@ def frame(folder, name, rgb, lab) -> None:
     (folder / f"{name}.label.json").write_text(json.dumps(lab))
 
 
-def run(sources, out, **kw) -> dict:
-    return recognise(RecogniseSettings(tuple(str(s) for s in sources), **kw), out, resolve_torch_device("cpu"))
+def run(sources, out, overwrite=False, **kw) -> dict:
+    return recognise(RecogniseSettings(tuple(str(s) for s in sources), **kw), out, resolve_torch_device("cpu"),
+                     overwrite=overwrite)
 
 
 def row(summary, measure_name, kind="render", split="all", value="all") -> dict:
@@ -156,14 +158,15 @@ def test_out_holding_something_else_is_refused_and_its_own_output_is_redone(tmp_
     frame(tmp_path / "frames", "astronaut", data.astronaut(), label())
     other = tmp_path / "other"
     other.mkdir()
-    (other / "notes.txt").write_text("mine")
-    with pytest.raises(InputError, match="not `recognise` output"):
+    (other / "run.json").write_text('{"identity": {}}')                 # a run, say
+    with pytest.raises(OutputInUse, match="holds the output of `isu-validate run`"):
         run([tmp_path / "frames"], other)
-    assert [p.name for p in other.iterdir()] == ["notes.txt"]
+    assert [p.name for p in other.iterdir()] == ["run.json"]
     run([tmp_path / "frames"], tmp_path / "out")
     run([tmp_path / "frames"], tmp_path / "out")                     # the same settings: done again
-    with pytest.raises(InputError):
+    with pytest.raises(OutputInUse, match="other settings"):
         run([tmp_path / "frames"], tmp_path / "out", limit=1)        # other settings: refused
+    run([tmp_path / "frames"], tmp_path / "out", limit=1, overwrite=True)   # unless the user says so
 
 
 def test_pairs_real_frames_beside_the_renders_and_stand_ins_marked(tmp_path, shared_models):

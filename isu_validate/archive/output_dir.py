@@ -45,6 +45,7 @@ SIGNATURES: tuple[tuple[str, str, tuple[str, str] | None], ...] = (
     ("stylize.json", "stylize", None),
     ("stages.json", "bench augment", None),
     ("session.json", "capture shoot", None),
+    ("frames.jsonl", "recognise", ("summary.json", "settings")),
 )
 
 

@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 from ..devices import add_device_argument
+from . import add_overwrite_option
 
 
 def register(sub) -> None:
@@ -29,6 +30,7 @@ def register(sub) -> None:
     p.add_argument("--by", action="append", default=[], choices=("preset", "external_light", "car_lights", "light"),
                    help="also print the table split by this (repeatable; the report has every split)")
     add_device_argument(p)
+    add_overwrite_option(p, "another command's output, or recognise output of other sources or settings")
     p.set_defaults(func=run)
 
 
@@ -40,7 +42,7 @@ def run(args) -> int:
     if args.limit is not None and args.limit < 1:
         raise InputError(f"--limit must be 1 or more, got {args.limit}")
     settings = RecogniseSettings(tuple(str(s) for s in args.sources), args.limit)
-    summary = recognise(settings, args.out, resolve_torch_device(args.device))
+    summary = recognise(settings, args.out, resolve_torch_device(args.device), overwrite=args.overwrite)
     for split in ("all", *args.by):
         print(format_table(summary, split))
     print(f"report: {args.out / 'index.html'}", file=sys.stderr)

@@ -11,8 +11,8 @@ import time
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from ..archive.output_dir import claim_output
 from ..atomic import write_json, write_text
-from ..errors import InputError
 from ..progress import Progress
 from ..recognition.frames import KINDS, Frame
 from ..recognition.objects import PLAUSIBLE
@@ -34,21 +34,6 @@ class RecogniseSettings:
         return {"sources": list(self.sources), "limit": self.limit}
 
 
-def check_out(out: Path, settings: RecogniseSettings) -> None:
-    """Refuse a non-empty OUT unless it is this command's output with the same settings (then it is redone)."""
-    if not out.exists() or (out.is_dir() and not any(out.iterdir())):
-        return
-    if not out.is_dir():
-        raise InputError(f"--out {out} is a file: give a new or empty folder")
-    try:
-        stored = json.loads((out / SUMMARY).read_text())
-    except (OSError, ValueError):
-        stored = None
-    if not stored or stored.get("format") != FORMAT or stored.get("settings") != settings.as_dict():
-        raise InputError(f"--out {out} is not empty and is not `recognise` output of these sources: "
-                         "give a new or empty folder (nothing in it was changed)")
-
-
 def gather(settings: RecogniseSettings) -> tuple[list[dict], list[Frame]]:
     described, frames = [], []
     for i, raw in enumerate(settings.sources):
@@ -60,15 +45,16 @@ def gather(settings: RecogniseSettings) -> tuple[list[dict], list[Frame]]:
     return described, frames
 
 
-def recognise(settings: RecogniseSettings, out: Path, device, stream=sys.stderr) -> dict:
-    """Measure and write OUT; returns the summary. ``device`` is a resolved ``devices.TorchDevice``."""
-    check_out(out, settings)
+def recognise(settings: RecogniseSettings, out: Path, device, stream=sys.stderr, overwrite: bool = False) -> dict:
+    """Measure and write OUT; returns the summary. ``device`` is a resolved ``devices.TorchDevice``. OUT must be
+    new, empty, or this command's output of the same settings (redone); anything else needs ``overwrite``."""
+    output = claim_output(out, "recognise", settings.as_dict(), overwrite=overwrite)
     sources, frames = gather(settings)
     started = time.perf_counter()
     models = Yardsticks.load(device.name)
     load_s, cpu = time.perf_counter() - started, time.process_time()
-    out.mkdir(parents=True, exist_ok=True)
     # the marker first: an interrupted measurement (a corrupt frame, ^C) is this command's, so it may be redone
+    output.mark()
     write_json(out / SUMMARY, {"format": FORMAT, "settings": settings.as_dict(), "complete": False}, indent=1)
     records, crops = _read_all(frames, models, out, stream)
     read_s = time.perf_counter() - started - load_s
