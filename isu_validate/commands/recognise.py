@@ -59,7 +59,20 @@ def format_table(summary: dict, split: str = "all") -> str:
         ci = f"{r['ci95'][0]:.0%}-{r['ci95'][1]:.0%}" if r["ci95"] else "-"
         lines.append(f"{r['measure']:<24}{r['kind']:<10}{r['value']:<14}{rate:>6}  {r['n']:>4}  {ci:<13}"
                      f"{r['occluded']:>8}")
+    lines += _object_reads(summary)
     t = summary["timing"]
     lines.append(f"{summary['frames']['total']} frames on {summary['device']}: {t['per_frame_s']} s/frame, "
                  f"{t.get('cpu_s_per_frame')} CPU-s/frame (+{t['load_s']} s loading the models)")
     return "\n".join(lines)
+
+
+def _object_reads(summary: dict) -> list[str]:
+    """Which plausible class made each top-5 hit, and the commonest top-1 reads: a rate carried by one loose
+    class (a slab read as a "hand-held computer") must be visible as such."""
+    lines = []
+    for kind, objects in summary["objects"].items():
+        for name, o in objects.items():
+            hits = ", ".join(f"{c} {n}" for c, n in o["top5_hits_by_class"].items()) or "none"
+            top1 = ", ".join(f"{c} {n}" for c, n in list(o["top1"].items())[:3])
+            lines.append(f"{name} ({kind}, n {o['n']}): top-5 hits by class: {hits}; commonest top-1: {top1}")
+    return lines
