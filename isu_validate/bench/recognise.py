@@ -31,13 +31,19 @@ def register_bench(sub) -> None:
 
 def run(args) -> int:
     from isu_validate.devices import resolve_torch_device
+    from isu_validate.recognition import photos
+    from isu_validate.recognition.read import Yardsticks
 
     device = resolve_torch_device(args.device)
     datasets = args.datasets or [_render(args, preset) for preset in _presets(args.presets)]
     rows = [_measure(folder, args.out, device) for folder in datasets]
     print(format_rows(rows))
+    # the same models on real photographs: what a rate on renders is read against
+    calibration = photos.calibration(Yardsticks.load(device.name))
+    print(photos.format_calibration(calibration))
     args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "bench.json").write_text(json.dumps({"device": device.describe(), "rows": rows}, indent=1))
+    (args.out / "bench.json").write_text(json.dumps({"device": device.describe(), "rows": rows,
+                                                     "real_photographs": calibration}, indent=1))
     print(f"datasets and reports in {args.out}", file=sys.stderr)
     return 0
 

@@ -45,6 +45,7 @@ def run(args) -> int:
     summary = recognise(settings, args.out, resolve_torch_device(args.device), overwrite=args.overwrite)
     for split in ("all", *args.by):
         print(format_table(summary, split))
+    print("\n".join(format_footer(summary)))
     print(f"report: {args.out / 'index.html'}", file=sys.stderr)
     return 0
 
@@ -59,11 +60,15 @@ def format_table(summary: dict, split: str = "all") -> str:
         ci = f"{r['ci95'][0]:.0%}-{r['ci95'][1]:.0%}" if r["ci95"] else "-"
         lines.append(f"{r['measure']:<24}{r['kind']:<10}{r['value']:<14}{rate:>6}  {r['n']:>4}  {ci:<13}"
                      f"{r['occluded']:>8}")
-    lines += _object_reads(summary)
-    t = summary["timing"]
-    lines.append(f"{summary['frames']['total']} frames on {summary['device']}: {t['per_frame_s']} s/frame, "
-                 f"{t.get('cpu_s_per_frame')} CPU-s/frame (+{t['load_s']} s loading the models)")
     return "\n".join(lines)
+
+
+def format_footer(summary: dict) -> list[str]:
+    """Printed once after the tables: what carried the object reads, and the runtime."""
+    t = summary["timing"]
+    return [*_object_reads(summary),
+            f"{summary['frames']['total']} frames on {summary['device']}: {t['per_frame_s']} s/frame, "
+            f"{t.get('cpu_s_per_frame')} CPU-s/frame (+{t['load_s']} s loading the models)"]
 
 
 def _object_reads(summary: dict) -> list[str]:
