@@ -2,7 +2,6 @@
 (render, real, stand-in), preset and the scene's light; occluded features are counted apart."""
 from __future__ import annotations
 
-import math
 from collections import Counter, defaultdict
 
 from .expression import LABELS
@@ -12,13 +11,14 @@ Z95 = 1.959963984540054
 
 
 def wilson(hits: int, n: int, z: float = Z95) -> tuple[float, float] | None:
-    """Wilson score interval of a binomial rate (None for n = 0)."""
+    """Wilson score interval of a binomial rate (None for n = 0), through scipy's ``binomtest``."""
     if n <= 0:
         return None
-    p = hits / n
-    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
-    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
-    return max(0.0, centre - half), min(1.0, centre + half)
+    from scipy.stats import binomtest
+    from scipy.stats import norm
+
+    ci = binomtest(hits, n).proportion_ci(confidence_level=2 * norm.cdf(z) - 1, method="wilson")
+    return max(0.0, float(ci.low)), min(1.0, float(ci.high))
 
 
 def _is(feature: str, emotion: str | None = None):
