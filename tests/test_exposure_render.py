@@ -36,7 +36,8 @@ def frames(ae_rig, tmp_path_factory):
     """LOW and HIGH external light, rendered plainly and through the camera."""
     root = tmp_path_factory.mktemp("exposure-render")
     out = {}
-    for name, camera in (("plain", "default"), ("camera", ae_rig)):
+    plain = replace(load_camera("default"), imaging=None)   # the default rig auto-exposes: take its model off
+    for name, camera in (("plain", plain), ("camera", ae_rig)):
         with open_renderer("draft", camera=camera, channels=("exr",), cache_dir=root / "cache",
                            log_dir=root / "logs") as r:
             for light in ("LOW", "HIGH"):
@@ -64,7 +65,9 @@ def test_the_light_features_reach_the_image_through_the_cameras_auto_exposure(fr
     assert plain > 60                       # a renderer alone shows the night as night
     assert 0 < camera < plain / 2           # the camera gains it up, until its limits
     low, high = (_label(frames["camera", k])["imaging"]["exposure"] for k in ("LOW", "HIGH"))
-    assert low["at_limit"] == "max" and low["gain"] == 16.0
+    # the night takes the longest exposure and all the gain (whether that just reaches the target depends on
+    # how much the scene reflects: this one's white T-shirt meters 0.416, within the tolerance of 0.42)
+    assert low["exposure_us"] == 16600.0 and low["gain"] == 16.0 and low["at_limit"] in ("max", None)
     assert high["at_limit"] is None and high["metered"] == pytest.approx(0.42, abs=0.005)
     assert high["exposure_us"] < low["exposure_us"]
 

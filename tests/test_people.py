@@ -169,3 +169,33 @@ def test_people_check_ranks_a_belt_into_the_body_worse_than_one_off_it():
     assert is_worse("belt_lap_min", -0.001, 0.020) and not is_worse("belt_lap_min", 0.020, -0.001)
     assert is_worse("clear_wheel_hands", -0.01, 0.0) and is_worse("belt_diagonal_resting", 0.4, 0.6)
     assert is_worse("phone_to_palm", 0.03, 0.01) and is_worse("phone_to_palm", -0.03, 0.01)
+
+
+def test_eyes_teeth_and_hair_styles_are_where_a_face_has_them(people, model):
+    """The iris disc is centred on each eyeball's front pole; teeth lie only in the front of the mouth's
+    cavity; a buzz cut is a thinner shell than short hair, and a scene's hair style picks the topology."""
+    from isu_validate.render.people.regions import uv_parts
+    topology = _load(people.topology("male"))
+    faces, eye_uv = topology["faces"], topology["eye_uv"].reshape(-1, 3, 2)
+    rest = people_module.Body(model, people_module.driver_phenotype("MALE", "H3", "W2")).evaluate({})
+    v = rest.vertices.astype(np.float64)
+    for side in ("L", "R"):
+        front = uv_parts(model, [f"eye_front.{side}"])
+        radius = np.linalg.norm(eye_uv[front], axis=2)
+        assert 0.9 < radius.max() <= 1.45          # the disc reaches the equator (bounding-box corners aside)
+        ball = np.unique(faces[front | uv_parts(model, [f"eye_back.{side}"])])
+        centre = v[ball].mean(axis=0)
+        # the corner nearest the disc's centre looks straight ahead (the body faces -Y at rest)
+        nearest = faces[front].ravel()[np.argmin(radius.ravel())]
+        direction = (v[nearest] - centre) / np.linalg.norm(v[nearest] - centre)
+        assert direction[1] < -0.95
+        assert not eye_uv[~(uv_parts(model, ["eye_front.L"]) | uv_parts(model, ["eye_front.R"]))].any()
+    teeth = topology["field_teeth"] > 0
+    mouth = np.unique(faces[uv_parts(model, ["mouth_cavity", "tongue"])])
+    assert 50 < teeth.sum() and set(np.flatnonzero(teeth)) <= set(mouth)
+    assert v[teeth, 1].max() < v[mouth, 1].min() + 0.035          # the front of the mouth, not the throat
+    buzz, short = _load(people.topology("male", "buzz")), topology
+    assert buzz["hair_thickness"].max() < 0.5 * short["hair_thickness"].max()
+    assert people_module.hair_style_of({"driver_hair_style": "BUZZ"}, "female") == "buzz"
+    assert people_module.hair_style_of({}, "female") == "bob"
+    assert people_module.hair_style_of({"driver_hair_style": "BY_GENDER"}, "male") == "short"

@@ -178,3 +178,26 @@ def test_a_scene_file_holding_a_list_is_a_clear_error_not_a_traceback(tmp_path, 
     assert "not a list; write one scene per file" in capsys.readouterr().err
     assert not (tmp_path / "x.png").exists()
 
+
+
+def test_a_space_extends_another_adding_features_and_keeping_its_constraints(tmp_path):
+    diverse = load_space("isu-diverse")
+    assert diverse.names[:len(SPACE.names)] == SPACE.names
+    assert set(diverse.names) - set(SPACE.names) == {"driver_skin_tone", "driver_hair_colour", "driver_hair_style"}
+    assert not any(diverse.features[n].predicted for n in ("driver_skin_tone", "driver_hair_colour", "driver_hair_style"))
+    assert len(diverse.constraints) == len(SPACE.constraints)
+    assert {f.name: f.weight for f in diverse.predicted} == {f.name: f.weight for f in SPACE.predicted}
+    again = write(tmp_path, """
+        extends = "isu-paper"
+        [features.driver_gender]
+        type = "categorical"
+        values = ["A", "B"]
+        """)
+    with pytest.raises(SpaceError, match="redefines driver_gender"):
+        load_space(again)
+    (tmp_path / "a.toml").write_text(f'extends = "{tmp_path / "b.toml"}"\n[features.x]\ntype = "categorical"\nvalues = ["A"]\n')
+    (tmp_path / "b.toml").write_text(f'extends = "{tmp_path / "a.toml"}"\n[features.y]\ntype = "categorical"\nvalues = ["A"]\n')
+    with pytest.raises(SpaceError, match="extends it back"):
+        load_space(tmp_path / "a.toml")
+    with pytest.raises(SpaceError, match="extends 'no-such-space'"):
+        load_space(write(tmp_path, 'extends = "no-such-space"\n'))

@@ -36,7 +36,7 @@ from .worker import BlenderWorker, WorkerCrashed, WorkerFailed, WorkerTimeout
 # bump when the scene content or the outputs change: it is part of every cache key
 # 2: driver_face part, footprints; 3: the phone, can and bottle lie on the co-driver seat; 4: anny people;
 # 5: the camera frames tall drivers' heads, P8 by the door in view, light tree off
-RENDERER_VERSION = "isu-blender-5"
+RENDERER_VERSION = "isu-blender-6"
 
 # what the worker shows for a feature the scene space does not have (or that is inactive)
 DEFAULTS = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height": "H2", "driver_weight": "W2",
@@ -44,7 +44,9 @@ DEFAULTS = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height
             "child": "NO", "child_seat_orientation": "FRONT_FACING", "car_lights": "OFF",
             "external_light": "MEDIUM", "luggage": "NO", "luggage_orientation": 60.0,
             "luggage_position": "BACK", "luggage_colour": "YELLOW", "phone_codriver_seat": "NO",
-            "colacan_codriver_seat": "NO", "colabottle_codriver_seat": "NO"}
+            "colacan_codriver_seat": "NO", "colabottle_codriver_seat": "NO",
+            # the people's looks: not features of the paper's space (isu-paper renders these); isu-diverse varies them
+            "driver_skin_tone": "MEDIUM", "driver_hair_colour": "BROWN", "driver_hair_style": "BY_GENDER"}
 
 
 class BlenderRenderer:

@@ -29,8 +29,35 @@ def load_space(name_or_path: str | os.PathLike = DEFAULT_SPACE) -> SceneSpace:
         path = resolve_rig("spaces", name_or_path)
     except FileNotFoundError as exc:
         raise SpaceError(str(exc)) from None
+    return space_from_dict(_read_extended(path, ()), where=str(path))
+
+
+def _read_extended(path: Path, seen: tuple[Path, ...]) -> dict:
+    """A space file's tables; with ``extends = "BASE"`` the base space's features come first, then this
+    file's (which may add features, never redefine one), and the constraints of both apply."""
     raw = read_toml(path, SpaceError, "scene space")
-    return space_from_dict(raw, where=str(path))
+    base_name = raw.pop("extends", None)
+    if base_name is None:
+        return raw
+    if not isinstance(base_name, str):
+        raise SpaceError(f"{path}: extends must name one space (a shipped name or a .toml path), not {base_name!r}")
+    try:
+        base_path = resolve_rig("spaces", base_name)
+    except FileNotFoundError as exc:
+        raise SpaceError(f"{path}: extends {base_name!r}: {exc}") from None
+    if base_path.resolve() in seen or base_path.resolve() == path.resolve():
+        raise SpaceError(f"{path}: extends {base_name!r}, which extends it back; remove one of the two")
+    base = _read_extended(base_path, (*seen, path.resolve()))
+    own = raw.get("features", {})
+    again = sorted(set(own) & set(base.get("features", {})))
+    if again:
+        raise SpaceError(f"{path}: redefines {', '.join(again)} of the space it extends ({base_name}); "
+                         "give the new feature another name, or copy the base file and change it there")
+    merged = {**base, **raw, "features": {**base.get("features", {}), **own},
+              "constraints": [*base.get("constraints", []), *raw.get("constraints", [])]}
+    if "prompt_rules" not in raw and "prompt_rules" in base:
+        merged["prompt_rules"] = base["prompt_rules"]
+    return merged
 
 
 def space_from_dict(raw: dict, where: str = "<space>") -> SceneSpace:

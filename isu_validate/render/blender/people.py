@@ -13,20 +13,9 @@ from mathutils import Vector
 
 from ..labels import INSTANCE_ID
 from . import mesh as M
+from .people_look import Look
 
-SKIN = (0.38, 0.21, 0.14)   # linear RGB: a medium skin tone, apart from a white T-shirt in bright light
-SHIRT = {"BLACK": (0.012, 0.012, 0.013), "WHITE": (0.80, 0.80, 0.78)}
-HAIR = (0.030, 0.016, 0.009)
 BELT = (0.10, 0.10, 0.11)
-# garments drawn where their per-vertex field (render/people/regions.py) is positive, in this order
-# (later ones cover earlier ones): colour, roughness
-_GARMENTS = (("trousers", (0.02, 0.03, 0.07), 0.9), ("shoes", (0.015, 0.012, 0.01), 0.5),
-             ("shirt", SHIRT["WHITE"], 0.85), ("suit", (0.20, 0.45, 0.75), 0.9), ("brows", HAIR, 0.8),
-             ("scalp", HAIR, 0.55))
-LIPS = (0.30, 0.10, 0.085)
-# the other material slots (render/people/regions.SLOTS): colour, roughness, specular
-_SLOT_LOOK = {"eye_white": ((0.75, 0.72, 0.68), 0.2, 0.5), "iris": ((0.03, 0.018, 0.01), 0.15, 0.6),
-              "mouth": ((0.06, 0.01, 0.01), 0.6, 0.2), "hair": (HAIR, 0.55, 0.25)}
 
 
 def _load(path: str) -> dict:
@@ -44,8 +33,7 @@ class Person:
         self.state: dict = {}        # the arrays of state_path: a scene seen again loads nothing
         self.parts: dict[str, bpy.types.Object] = {}
         self.maps: dict[str, np.ndarray] = {}
-        self.materials: dict[str, bpy.types.Material] = {}
-        self.lips_mask = ""
+        self.look: Look | None = None
 
     def show(self, visible: bool) -> None:
         for obj in self.parts.values():
@@ -75,20 +63,21 @@ class Person:
             bpy.data.objects.remove(obj)
             bpy.data.meshes.remove(mesh)
         faces, slots, head = topo["faces"], topo["slots"], topo["head"]
-        self.lips_mask = str(topo["lips_mask"])
-        mats = [self._material(str(n)) for n in topo["slot_names"]]
+        self.look = self.look or Look(self.name, str(topo["lips_mask"]))
+        mats = [self.look.slot(str(n)) for n in topo["slot_names"]]
         fields = {str(k)[6:]: topo[k] for k in topo if str(k).startswith("field_")}
         self.parts, self.maps = {}, {}
         for part, chosen, pid in (("body", ~head, self.body_id), ("head", head, self.head_id)):
             used, local = np.unique(faces[chosen], return_inverse=True)
             mesh = _mesh(f"{self.name}_{part}", len(used), local.reshape(-1, 3), slots[chosen], mats,
-                         topo["uv"].reshape(-1, 3, 2)[chosen])
+                         {"UVMap": topo["uv"].reshape(-1, 3, 2)[chosen],
+                          "EyeUV": topo["eye_uv"].reshape(-1, 3, 2)[chosen]})
             for field, values in fields.items():
                 mesh.attributes.new(field, "FLOAT", "POINT").data.foreach_set(
                     "value", np.ascontiguousarray(values[used], np.float32))
             self.parts[part] = self._object(f"{self.name}_{part}", mesh, pid)
             self.maps[part] = used
-        hair_mat = self._material("hair")
+        hair_mat = self.look.slot("hair")
         mesh = _mesh(f"{self.name}_hair", len(topo["hair_i"]), topo["hair_faces"],
                      np.zeros(len(topo["hair_faces"]), np.uint8), [hair_mat], None)
         self.parts["hair"] = self._object(f"{self.name}_hair", mesh, self.head_id)
@@ -100,87 +89,11 @@ class Person:
         self.coll.objects.link(obj)
         return obj
 
-    def _material(self, slot: str) -> bpy.types.Material:
-        if slot not in self.materials:
-            if slot == "body":
-                self.materials[slot] = _body_material(f"{self.name}_body", self.lips_mask)
-            else:
-                colour, roughness, specular = _SLOT_LOOK[slot]
-                self.materials[slot] = M.material(f"{self.name}_{slot}", colour, roughness=roughness,
-                                                  specular=specular)
-        return self.materials[slot]
-
-    def set_shirt(self, colour) -> None:
-        self._material("body").node_tree.nodes["colour_shirt"].outputs[0].default_value = (*colour, 1.0)
+    def set_look(self, skin: str, hair: str, shirt: str | None = None) -> None:
+        self.look.set(skin, hair, shirt)
 
 
-def _body_material(name: str, lips_mask: str) -> bpy.types.Material:
-    """Skin with the garments drawn over it where their vertex fields are positive, and the lips where
-    MPFB's UV lip mask is bright."""
-    mat = bpy.data.materials.new(name)
-    mat.use_nodes = True
-    nodes, links = mat.node_tree.nodes, mat.node_tree.links
-    bsdf = nodes["Principled BSDF"]
-    bsdf.inputs["Specular IOR Level"].default_value = 0.3
-    bsdf.distribution = "GGX"
-    colour = _rgb(nodes, "colour_skin", SKIN)
-    rough = _value(nodes, 0.5)
-    for field, rgb, roughness in _GARMENTS:
-        inside = _inside(nodes, links, field)
-        colour = _mix(nodes, links, inside, colour, _rgb(nodes, f"colour_{field}", rgb).outputs[0])
-        rough = _mix(nodes, links, inside, rough, _value(nodes, roughness), "FLOAT")
-    uv = nodes.new("ShaderNodeUVMap")
-    uv.uv_map = "UVMap"
-    lips = nodes.new("ShaderNodeTexImage")
-    lips.image = bpy.data.images.load(lips_mask, check_existing=True)
-    lips.image.colorspace_settings.name = "Non-Color"
-    links.new(uv.outputs["UV"], lips.inputs["Vector"])
-    colour = _mix(nodes, links, lips.outputs["Color"], colour, _rgb(nodes, "colour_lips", LIPS).outputs[0])
-    links.new(colour, bsdf.inputs["Base Color"])
-    links.new(rough, bsdf.inputs["Roughness"])
-    return mat
-
-
-def _inside(nodes, links, field: str):
-    """1 where the vertex field is positive (interpolated across triangles: a straight, sharp edge)."""
-    attr = nodes.new("ShaderNodeAttribute")
-    attr.attribute_type, attr.attribute_name = "GEOMETRY", field
-    step = nodes.new("ShaderNodeMath")
-    step.operation = "GREATER_THAN"
-    step.inputs[1].default_value = 0.0
-    links.new(attr.outputs["Fac"], step.inputs[0])
-    return step.outputs[0]
-
-
-def _rgb(nodes, name: str, colour):
-    node = nodes.new("ShaderNodeRGB")
-    node.name = name
-    node.outputs[0].default_value = (*colour, 1.0)
-    return node
-
-
-def _value(nodes, value: float):
-    node = nodes.new("ShaderNodeValue")
-    node.outputs[0].default_value = value
-    return node.outputs[0]
-
-
-def _mix(nodes, links, factor, a, b, kind: str = "RGBA"):
-    node = nodes.new("ShaderNodeMix")
-    node.data_type = kind
-    suffix = "Color" if kind == "RGBA" else "Float"
-    links.new(factor, _socket(node.inputs, "Factor_Float"))
-    links.new(a if not hasattr(a, "outputs") else a.outputs[0], _socket(node.inputs, f"A_{suffix}"))
-    links.new(b, _socket(node.inputs, f"B_{suffix}"))
-    return _socket(node.outputs, f"Result_{suffix}")
-
-
-def _socket(sockets, identifier: str):
-    """A socket by identifier (ShaderNodeMix has several sockets of one name, one per data type)."""
-    return next(s for s in sockets if s.identifier == identifier)
-
-
-def _mesh(name: str, n_vertices: int, triangles: np.ndarray, slots: np.ndarray, materials, uv_corners):
+def _mesh(name: str, n_vertices: int, triangles: np.ndarray, slots: np.ndarray, materials, uv_layers: dict | None):
     mesh = bpy.data.meshes.new(name)
     mesh.vertices.add(n_vertices)
     mesh.loops.add(len(triangles) * 3)
@@ -192,9 +105,9 @@ def _mesh(name: str, n_vertices: int, triangles: np.ndarray, slots: np.ndarray, 
     for mat in materials:
         mesh.materials.append(mat)
     mesh.polygons.foreach_set("material_index", np.ascontiguousarray(slots, np.int32))
-    if uv_corners is not None:
-        layer = mesh.uv_layers.new(name="UVMap")
-        layer.data.foreach_set("uv", np.ascontiguousarray(uv_corners, np.float32).ravel())
+    for layer_name, corners in (uv_layers or {}).items():
+        layer = mesh.uv_layers.new(name=layer_name)
+        layer.data.foreach_set("uv", np.ascontiguousarray(corners, np.float32).ravel())
     mesh.update(calc_edges=True)
     mesh.validate(clean_customdata=False)
     return mesh
@@ -226,7 +139,7 @@ class Driver:
         self.person = self.persons[spec["topology"]]
         data = self.person.set(spec["topology"], spec["state"])
         self.slide_seat(float(data["seat_shift"]))
-        self.person.set_shirt(SHIRT[f["tshirt_colour"]])
+        self.person.set_look(f["driver_skin_tone"], f["driver_hair_colour"], f["tshirt_colour"])
         self.belt.apply(data, f["seat_belt"] == "YES")
         self.phone_hand = None
         if "phone_centre" in data:   # the phone lies in the posed palm, turned as the rig's position says
@@ -248,11 +161,13 @@ class Child:
     def __init__(self, coll):
         self.person = Person("child", coll, INSTANCE_ID["child"], INSTANCE_ID["child"])
 
-    def apply(self, spec: dict | None) -> None:
+    def apply(self, spec: dict | None, f: dict) -> None:
+        """The child, in its one-piece suit, has the driver's skin tone and hair colour (a family)."""
         if spec is None:
             self.person.show(False)
             return
         self.person.set(spec["topology"], spec["state"])
+        self.person.set_look(f["driver_skin_tone"], f["driver_hair_colour"])
 
 
 class _Belt:

@@ -150,7 +150,7 @@ class Studio:
             self.driver.hide()
         else:
             self.driver.apply(features, people["driver"])
-        self.child.apply(people.get("child"))
+        self.child.apply(people.get("child"), features)
         self.objects.apply(features, self.driver.hand_pose())
         self._board(extras.get("board"))
 

@@ -1,19 +1,25 @@
 """Facial expressions as anny's ARKit-style facial actions (0..1).
 
-HAPPY is a broad smile (Duchenne: cheeks raised, eyes narrowed, lips parted); SERIOUS a stern face
-(brows lowered and drawn, lips pressed, corners down). How strong they must be to read at the presets'
+HAPPY is a broad smile (Duchenne: cheeks raised, eyes narrowed, lips parted over the teeth); SERIOUS a
+stern face (brows lowered and drawn, lips pressed), never a sad one. How strong they must be to read at the presets'
 resolutions was measured (see ``isu-validate bench faces`` and the render README)."""
 from __future__ import annotations
 
+# anny's resting eyelids leave a narrow opening that, seen from above by the mirror, hides the whites and
+# most of the iris: every expression opens the eyes a little (eyeWide), as an alert driver's are
+_OPEN_EYES = {"eyeWideLeft": 0.3, "eyeWideRight": 0.3}
 EXPRESSIONS = {
-    "HAPPY": {"mouthSmileLeft": 1.0, "mouthSmileRight": 1.0, "cheekSquintLeft": 0.7, "cheekSquintRight": 0.7,
-              "eyeSquintLeft": 0.4, "eyeSquintRight": 0.4, "jawOpen": 0.18, "mouthUpperUpLeft": 0.45,
-              "mouthUpperUpRight": 0.45, "mouthDimpleLeft": 0.4, "mouthDimpleRight": 0.4,
-              "browInnerUp": 0.15},
-    "SERIOUS": {"browDownLeft": 0.8, "browDownRight": 0.8, "mouthPressLeft": 0.7, "mouthPressRight": 0.7,
-                "mouthFrownLeft": 0.6, "mouthFrownRight": 0.6, "mouthRollLower": 0.2, "eyeSquintLeft": 0.15,
-                "eyeSquintRight": 0.15, "noseSneerLeft": 0.1, "noseSneerRight": 0.1},
-    "NEUTRAL": {},
+    # Duchenne smile: mouth corners up and back, upper lip raised off the teeth, cheeks raised
+    "HAPPY": {"mouthSmileLeft": 1.0, "mouthSmileRight": 1.0, "cheekSquintLeft": 0.8, "cheekSquintRight": 0.8,
+              "eyeSquintLeft": 0.25, "eyeSquintRight": 0.25, "jawOpen": 0.12, "mouthUpperUpLeft": 0.5,
+              "mouthUpperUpRight": 0.5, "mouthDimpleLeft": 0.3, "mouthDimpleRight": 0.3,
+              "mouthStretchLeft": 0.2, "mouthStretchRight": 0.2, "eyeWideLeft": 0.1, "eyeWideRight": 0.1},
+    # stern, not sad: brows lowered and drawn in, lips pressed flat, the gaze steady; no frown and no
+    # raised inner brows (those read as sadness)
+    "SERIOUS": {"browDownLeft": 0.75, "browDownRight": 0.75, "mouthPressLeft": 0.6, "mouthPressRight": 0.6,
+                "mouthRollLower": 0.1, "jawForward": 0.1, "noseSneerLeft": 0.1, "noseSneerRight": 0.1,
+                **_OPEN_EYES},
+    "NEUTRAL": _OPEN_EYES,
 }
 
 

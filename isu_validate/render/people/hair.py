@@ -19,7 +19,9 @@ from .skeleton import Posed
 _HAIRLINES = {
     "short": ((-1.0, -0.060), (0.0, 0.012), (0.35, 0.022), (1.0, 0.052)),
     "bob": ((-1.0, -0.170), (-0.3, -0.125), (0.2, -0.095), (0.45, 0.020), (1.0, 0.045)),
+    "buzz": ((-1.0, -0.050), (0.0, 0.015), (0.35, 0.026), (1.0, 0.058)),
 }
+STYLES = tuple(_HAIRLINES)
 
 
 PAINTED = 0.004   # the hair colour is painted on the scalp this far (m) beyond the shell's edge
@@ -57,6 +59,8 @@ def hair_style(rest: Posed, faces: np.ndarray, candidates: np.ndarray, name: str
     if name == "bob":
         base = 0.012 + 0.035 * np.clip((eyes[2] - v[:, 2]) / (0.12 * s), 0.0, 1.0)
         taper = np.where(cos_front > 0.3, taper, 1.0)
+    elif name == "buzz":       # clipped a few millimetres long: the scalp's shape shows through
+        base = np.full(len(v), 0.0025)
     else:
         base = np.full(len(v), 0.007)
     thickness = base * s * taper * scale_thickness

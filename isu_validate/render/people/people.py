@@ -20,7 +20,13 @@ from .store import PeopleStore, entry_key, load_entry
 
 KINDS = ("male", "female", "child")
 JOINTS = ("root", "spine01", "neck01", "head")    # bone heads a state keeps (for measuring a pose)
-HAIR_STYLE = {"male": "short", "female": "bob", "child": "short"}
+HAIR_STYLE = {"male": "short", "female": "bob", "child": "short"}   # a scene's BY_GENDER (and the child's)
+
+
+def hair_style_of(f: dict, kind: str) -> str:
+    """The driver's hair style: the scene's ``driver_hair_style`` (SHORT, BOB, BUZZ), else by gender."""
+    style = f.get("driver_hair_style", "BY_GENDER")
+    return HAIR_STYLE[kind] if style == "BY_GENDER" else style.lower()
 
 
 def rig_part_hash(cabin: dict, parts: tuple[str, ...]) -> str:
@@ -46,9 +52,10 @@ class People:
         out = {"driver": None, "child": None}
         if with_driver:
             kind = "female" if f["driver_gender"] == "FEMALE" else "male"
-            out["driver"] = {"topology": str(self.topology(kind)),
+            style = hair_style_of(f, kind)
+            out["driver"] = {"topology": str(self.topology(kind, style)),
                              "state": str(self.driver_state(f["driver_gender"], f["driver_height"], f["driver_weight"],
-                                                            f["driver_emotion"], f["phone_position"])),
+                                                            f["driver_emotion"], f["phone_position"], style)),
                              "kind": kind}
         if f.get("child_seat") == "YES" and f.get("child") == "YES":
             front = f["child_seat_orientation"] == "FRONT_FACING"
@@ -57,25 +64,28 @@ class People:
         return out
 
     # ------------------------------------------------------------------ entries
-    def topology(self, kind: str):
-        key = entry_key("topology", {"person": kind})
+    def topology(self, kind: str, style: str | None = None):
+        style = style or HAIR_STYLE[kind]
+        key = entry_key("topology", {"person": kind, "hair": style})
         found = self.store.get("topology", key)
         if found:
             return found
         with _posing(self):
-            return self.store.put("topology", key, _topology(kind))
+            return self.store.put("topology", key, _topology(kind, style))
 
-    def driver_state(self, gender: str, height: str, weight: str, emotion: str, phone_position: str):
+    def driver_state(self, gender: str, height: str, weight: str, emotion: str, phone_position: str,
+                     style: str | None = None):
+        kind = "female" if gender == "FEMALE" else "male"
+        style = style or HAIR_STYLE[kind]
         inputs = {"rig": self.driver_rig, "gender": gender, "height": height, "weight": weight,
-                  "emotion": emotion, "phone_position": phone_position}
+                  "emotion": emotion, "phone_position": phone_position, "hair": style}
         key = entry_key("driver", inputs)
         found = self.store.get("driver", key)
         if found:
             return found
         with _posing(self):
             pose = self._driver_pose(gender, height, weight, phone_position)
-            kind = "female" if gender == "FEMALE" else "male"
-            topo = load_entry(self.topology(kind))
+            topo = load_entry(self.topology(kind, style))
             body = Body(load_model(), driver_phenotype(gender, height, weight), expressions.facial_actions(emotion))
             posed = body.evaluate(_deltas_from(pose))
             state = {**_surface_state(posed, topo), **{k: pose[k] for k in pose if not k.startswith("d_")}}
@@ -120,7 +130,7 @@ class People:
 
 
 # ---------------------------------------------------------------------- helpers
-def _topology(kind: str) -> dict:
+def _topology(kind: str, style: str) -> dict:
     """Triangles, per-corner UVs, material slot and head flag per triangle, garment fields per vertex,
     and the hair style."""
     model = load_model()
@@ -133,9 +143,10 @@ def _topology(kind: str) -> dict:
         fields = regions.adult_fields(body, female=kind == "female")
     rest = body.evaluate({})
     candidates = regions.bone_weights(model, ("head", "neck")) > 0.5
-    style = hair.hair_style(rest, faces, candidates, HAIR_STYLE[kind], 0.6 if kind == "child" else 1.0)
+    style = hair.hair_style(rest, faces, candidates, style, 0.6 if kind == "child" else 1.0)
     uv = model.texture_coordinates[model.face_texture_coordinate_indices].cpu().numpy().reshape(-1, 2)
-    return {"faces": faces, "uv": uv.astype(np.float32), "slots": regions.slots(model),
+    return {"faces": faces, "uv": uv.astype(np.float32), "eye_uv": regions.eye_uv(model).reshape(-1, 2),
+            "slots": regions.slots(model),
             "head": regions.head_mask(model, faces), "slot_names": np.array(regions.SLOTS),
             **{f"field_{k}": v.astype(np.float32) for k, v in fields.items()}, "field_scalp": style.field,
             "lips_mask": np.array(str(regions.lips_mask_path())),

