@@ -168,7 +168,7 @@ def test_features_of_another_renderer_are_not_reused(tmp_path, base):
 
     old = tmp_path / "old"
     shutil.copytree(base, old)
-    with pytest.raises(ValueError, match="renderer 'isu-blender-5'.*current renderer is 'isu-blender-99'"):
+    with pytest.raises(ValueError, match=f"renderer '{RENDERER_VERSION}'.*current renderer is 'isu-blender-99'"):
         load_bank(old, SPACE, "isu-blender-99")
 
 

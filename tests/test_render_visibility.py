@@ -68,8 +68,11 @@ def caches(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def renderer(cabin, caches, tmp_path_factory):
-    r = open_renderer("draft", cabin=cabin, channels=("seg",), log_dir=tmp_path_factory.mktemp("logs"),
-                      cache_dir=caches)
+    # without the default rig's auto-exposure: the frame check is tested on the light that reaches the sensor
+    from dataclasses import replace
+    from capture.camera import load_camera
+    r = open_renderer("draft", camera=replace(load_camera("default"), imaging=None), cabin=cabin, channels=("seg",),
+                      log_dir=tmp_path_factory.mktemp("logs"), cache_dir=caches)
     yield r
     r.close()
 
