@@ -146,9 +146,16 @@ def _hair_material(name: str) -> bpy.types.Material:
     bsdf.inputs["Roughness"].default_value = 0.6     # many strands scatter light: no plastic highlight
     bsdf.inputs["Specular IOR Level"].default_value = 0.25
     hair = _rgb(nodes, "colour_hair", HAIR_COLOURS["BROWN"]).outputs[0]
-    colour = _mix(nodes, links, _strands(nodes, links), _multiply_rgb(nodes, links, hair, (0.75, 0.75, 0.75)),
+    strands = _strands(nodes, links)
+    colour = _mix(nodes, links, strands, _multiply_rgb(nodes, links, hair, (0.75, 0.75, 0.75)),
                   _multiply_rgb(nodes, links, hair, (1.25, 1.22, 1.2)))
     links.new(colour, bsdf.inputs["Base Color"])
+    # the strands as relief too: the highlight breaks into streaks instead of one smooth sheen
+    bump = nodes.new("ShaderNodeBump")
+    bump.inputs["Strength"].default_value = 0.6
+    bump.inputs["Distance"].default_value = 0.0005
+    links.new(strands, bump.inputs["Height"])
+    links.new(bump.outputs["Normal"], bsdf.inputs["Normal"])
     return mat
 
 
