@@ -57,7 +57,9 @@ def test_apply_on_a_run_develops_every_render_and_resumes(camera, tmp_path, caps
 
 def test_apply_names_what_is_missing(tmp_path, capsys):
     (tmp_path / "run" / "images").mkdir(parents=True)
-    assert main(["exposure", "apply", str(tmp_path / "run"), "--camera", "default"]) == 2
+    plain = tmp_path / "plain.toml"        # the default rig without its auto-exposure table
+    plain.write_text(Path(load_camera("default").source).read_text().split("\n[exposure]")[0])
+    assert main(["exposure", "apply", str(tmp_path / "run"), "--camera", str(plain)]) == 2
     assert "no imaging model" in capsys.readouterr().err
     camera = write_imaging(load_camera("default").source, synthetic.camera(), tmp_path / "c.toml")
     assert main(["exposure", "apply", str(tmp_path / "run"), "--camera", str(camera)]) == 2

@@ -1,6 +1,8 @@
 """The imaging model in the camera file, and applying it to linear light (synthetic frames, no Blender)."""
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -16,10 +18,13 @@ def _scene(light=1.0, size=(120, 160)):
     return synthetic.scene(np.random.default_rng(1), size) * light
 
 
-def test_a_camera_file_without_imaging_tables_has_no_model_and_keeps_its_cache_key():
-    rig = load_camera("default")
+def test_a_camera_file_without_imaging_tables_has_no_model_and_keeps_its_cache_key(tmp_path):
+    plain = tmp_path / "plain.toml"      # the default rig without its auto-exposure table
+    plain.write_text(Path(load_camera("default").source).read_text().split("\n[exposure]")[0])
+    rig = load_camera(plain)
     assert rig.imaging is None
     assert read_toml(rig.source).imaging is None
+    assert load_camera("default").imaging.exposure is not None     # the shipped rig auto-exposes
     plain = BlenderRenderer("draft", rig)
     with_model = BlenderRenderer("draft", _rig_with(synthetic.camera()))
     assert plain.imaging is None and with_model.imaging is not None

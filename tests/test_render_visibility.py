@@ -66,12 +66,16 @@ def caches(tmp_path_factory):
     return tmp_path_factory.mktemp("cache")
 
 
-@pytest.fixture(scope="module")
-def renderer(cabin, caches, tmp_path_factory):
-    # without the default rig's auto-exposure: the frame check is tested on the light that reaches the sensor
+def _plain_camera():
+    """The default rig without its auto-exposure: the frame check is tested on the light that reaches the sensor."""
     from dataclasses import replace
     from capture.camera import load_camera
-    r = open_renderer("draft", camera=replace(load_camera("default"), imaging=None), cabin=cabin, channels=("seg",),
+    return replace(load_camera("default"), imaging=None)
+
+
+@pytest.fixture(scope="module")
+def renderer(cabin, caches, tmp_path_factory):
+    r = open_renderer("draft", camera=_plain_camera(), cabin=cabin, channels=("seg",),
                       log_dir=tmp_path_factory.mktemp("logs"), cache_dir=caches)
     yield r
     r.close()
@@ -133,8 +137,8 @@ def test_a_face_behind_a_raised_phone_is_occluded(frames):
 
 def test_a_run_threshold_changes_what_is_occluded_not_the_pixels(frames, cabin, caches, tmp_path):
     frames("lit", LIT)   # in the shared cache now: the strict renderer below never starts Blender
-    strict = open_renderer("draft", cabin=cabin, channels=("seg",), log_dir=tmp_path, cache_dir=caches,
-                           min_visible={"seat_belt": 0.95})   # arms cross the belt: ~0.75 is seen
+    strict = open_renderer("draft", camera=_plain_camera(), cabin=cabin, channels=("seg",), log_dir=tmp_path,
+                           cache_dir=caches, min_visible={"seat_belt": 0.95})   # arms cross the belt: ~0.75 is seen
     try:
         result = strict.render(LIT, tmp_path / "strict.png")
     finally:
