@@ -11,6 +11,7 @@ from mathutils import Vector
 
 from ..cabin_geometry import CHILD_SEAT_PADS, child_seat_boxes, pitch
 from ..labels import INSTANCE_ID
+from .. import product_art as art
 from . import mesh as M
 from .cabin import euler_deg
 
@@ -66,6 +67,9 @@ def build_luggage(coll) -> tuple[Group, bpy.types.Material]:
     for k, y in enumerate((-0.12, -0.04, 0.04, 0.12)):  # moulded ribs
         g.add(M.box(f"lug_rib{k}", (0.117, y, 0.295), (0.006, 0.018, 0.48), body_mat, coll, pid, rounded=0.3))
     g.add(M.box("lug_seam", (0, 0, 0.295), (0.236, 0.406, 0.012), dark, coll, pid))
+    zip_metal = M.material("luggage_zip", (0.55, 0.55, 0.57), roughness=0.3, metallic=1.0)
+    g.add(M.box("lug_zip", (0, 0, 0.295), (0.2375, 0.4075, 0.003), zip_metal, coll, pid))   # the zip in the seam
+    g.add(M.box("lug_zip_pull", (0.119, 0.10, 0.285), (0.004, 0.012, 0.028), zip_metal, coll, pid, rounded=0.3))
     g.add(M.box("lug_handle", (0, 0, 0.585), (0.04, 0.14, 0.025), dark, coll, pid, rounded=0.3))
     for k, (x, y) in enumerate(((0.08, 0.16), (0.08, -0.16), (-0.08, 0.16), (-0.08, -0.16))):
         g.add(M.cylinder(f"lug_wheel{k}", (x, y, 0.0), 0.022, 0.025, dark, coll, pid, 10))
@@ -73,46 +77,77 @@ def build_luggage(coll) -> tuple[Group, bpy.types.Material]:
 
 
 def build_phone(coll, instance: str, screen_on: bool = True) -> Group:
-    """A 150 x 72 x 8 mm phone centred on its origin, long axis along local y, screen on local +z: lit
-    while in use (in the hand), dark glass when it lies unused (on the co-driver seat)."""
+    """A 152 x 74 x 8.5 mm smartphone centred on its origin, long axis along local y, screen on local +z:
+    a case round it, black glass in front with a thin bezel round the screen (lit with a home screen
+    while in use in the hand, dark and reflecting when it lies unused on the co-driver seat), and a
+    camera bump with two lenses and a flash on its back."""
     g = Group(instance, coll)
     pid = INSTANCE_ID[instance]
-    case = M.material("phone_case", (0.01, 0.01, 0.012), roughness=0.3)
+    case = M.material("phone_case", (0.045, 0.06, 0.09), roughness=0.45)
+    glass = M.material("phone_glass", (0.004, 0.004, 0.005), roughness=0.03, specular=1.0)
+    lens = M.material("phone_lens", (0.002, 0.002, 0.003), roughness=0.02, specular=1.0)
+    ring = M.material("phone_lens_ring", (0.5, 0.5, 0.52), roughness=0.25, metallic=1.0)
+    flash = M.material("phone_flash", (0.8, 0.75, 0.6), roughness=0.3)
+    g.add(M.box("phone_body", (0, 0, 0), (0.074, 0.152, 0.0085), case, coll, pid, rounded=0.15))
+    g.add(M.box("phone_front", (0, 0, 0.0043), (0.071, 0.149, 0.0008), glass, coll, pid, rounded=0.06))
     if screen_on:
-        screen = M.material("phone_screen", (0.02, 0.03, 0.05), roughness=0.1,
-                            emission=(0.35, 0.55, 1.0), emission_strength=1.6)
-    else:
-        screen = M.material("phone_screen_off", (0.008, 0.009, 0.011), roughness=0.05, specular=0.9)
-    g.add(M.box("phone_body", (0, 0, 0), (0.074, 0.152, 0.009), case, coll, pid, rounded=0.15))
-    g.add(M.box("phone_screen", (0, 0, 0.0047), (0.066, 0.140, 0.001), screen, coll, pid))
+        screen = M.image_material("phone_home_screen", art.home_screen(), "plane", roughness=0.05,
+                                  emission_strength=2.0, specular=0.9)
+        g.add(M.box("phone_screen", (0, 0, 0.0048), (0.066, 0.143, 0.0002), screen, coll, pid))
+    g.add(M.box("phone_camera_bump", (-0.018, 0.053, -0.0050), (0.026, 0.032, 0.0018), glass, coll, pid,
+                rounded=0.25))
+    for k, y in enumerate((0.061, 0.045)):
+        g.add(M.cylinder(f"phone_lens_ring{k}", (-0.018, y, -0.0066), 0.0055, 0.0008, ring, coll, pid, 16))
+        g.add(M.cylinder(f"phone_lens{k}", (-0.018, y, -0.0070), 0.0042, 0.0011, lens, coll, pid, 16))
+    g.add(M.cylinder("phone_flash", (-0.008, 0.061, -0.0062), 0.0018, 0.0004, flash, coll, pid, 10))
+    for obj in g.parts[-5:]:
+        obj.rotation_euler = (math.pi, 0, 0)      # the lenses face out of the back (-z)
+        obj.location.z = -0.0059                  # on the bump's back face
     return g
 
 
+# a 1 l PET bottle, radius against height from the base (m): petaloid foot, body, waist, shoulder, neck
+_BOTTLE = [(0.0, 0.0), (0.030, 0.001), (0.040, 0.006), (0.044, 0.018), (0.044, 0.095), (0.041, 0.100),
+           (0.041, 0.104), (0.044, 0.110), (0.044, 0.185), (0.040, 0.205), (0.030, 0.228), (0.020, 0.243),
+           (0.0135, 0.252), (0.0135, 0.258), (0.0175, 0.259), (0.0175, 0.262), (0.0135, 0.263),
+           (0.0135, 0.268), (0.0, 0.268)]
+# a 330 ml can: domed base, body, necked top
+_CAN = [(0.0, 0.004), (0.026, 0.0), (0.031, 0.003), (0.033, 0.010), (0.033, 0.104), (0.0295, 0.113),
+        (0.0285, 0.116), (0.0, 0.116)]
+
+
 def build_cola_bottle(coll, instance: str) -> Group:
-    """A 1 l cola bottle (dark liquid, red label), 0.29 m long from the base (origin) along local +z,
-    0.089 m across the label."""
+    """A 1 l PET cola bottle lying or standing from its base (origin) along local +z, 0.29 m long with
+    its cap: dark cola behind glossy plastic, a printed label round the body, a ridged red cap."""
     g = Group(instance, coll)
     pid = INSTANCE_ID[instance]
-    liquid = M.material("cola", (0.04, 0.012, 0.005), roughness=0.08, specular=0.9)
-    label = M.material("cola_label", (0.6, 0.01, 0.01), roughness=0.5)
-    cap = M.material("cola_cap", (0.6, 0.01, 0.01), roughness=0.4)
-    g.add(M.cylinder("bottle_body", (0, 0, 0), 0.043, 0.19, liquid, coll, pid))
-    g.add(M.cylinder("bottle_label", (0, 0, 0.09), 0.0445, 0.07, label, coll, pid))
-    g.add(M.ellipsoid("bottle_shoulder", (0, 0, 0.19), (0.043, 0.043, 0.07), liquid, coll, pid))
-    g.add(M.cylinder("bottle_neck", (0, 0, 0.22), 0.016, 0.06, liquid, coll, pid))
-    g.add(M.cylinder("bottle_cap", (0, 0, 0.275), 0.018, 0.022, cap, coll, pid))
+    cola = M.material("cola_in_pet", (0.035, 0.010, 0.004), roughness=0.04, specular=1.0)
+    label = M.image_material("cola_label", art.cola_label(), "cylinder", roughness=0.35, specular=0.6)
+    cap = M.material("cola_cap", (0.60, 0.015, 0.015), roughness=0.45)
+    g.add(M.new_object("bottle_body", M.lathe("cola_bottle", _BOTTLE, 40), cola, coll, pid))
+    sleeve = g.add(M.new_object("bottle_label", M.unit_cylinder(40, cap=False), label, coll, pid))
+    sleeve.location, sleeve.scale = (0, 0, 0.118), (0.0446, 0.0446, 0.062)
+    g.add(M.cylinder("bottle_cap", (0, 0, 0.266), 0.0158, 0.022, cap, coll, pid, 24))
+    for k in range(12):                    # the cap's grip ridges
+        a = 2 * math.pi * k / 12
+        g.add(M.box(f"bottle_cap_ridge{k}", (0.0158 * math.cos(a), 0.0158 * math.sin(a), 0.277),
+                    (0.0012, 0.0012, 0.018), cap, coll, pid, rotation=(0, 0, a)))
     return g
 
 
 def build_can(coll, instance: str) -> Group:
-    """A 330 ml cola can, red with silver ends, 0.118 m tall from the base (origin), 0.066 m across."""
+    """A 330 ml cola can from its base (origin) along local +z, 0.116 m tall and 0.066 m across: the
+    printed label on the aluminium body, silver base and top with a rim and a ring-pull tab."""
     g = Group(instance, coll)
     pid = INSTANCE_ID[instance]
-    red = M.material("can_red", (0.55, 0.01, 0.01), roughness=0.25, metallic=0.6)
-    silver = M.material("can_top", (0.6, 0.6, 0.62), roughness=0.2, metallic=1.0)
-    g.add(M.cylinder("can_body", (0, 0, 0.01), 0.033, 0.10, red, coll, pid))
-    g.add(M.cylinder("can_bottom", (0, 0, 0.0), 0.029, 0.01, silver, coll, pid))
-    g.add(M.cylinder("can_top", (0, 0, 0.11), 0.029, 0.008, silver, coll, pid))
+    silver = M.material("can_metal", (0.62, 0.62, 0.64), roughness=0.18, metallic=1.0)
+    label = M.image_material("can_label", art.cola_label(), "cylinder", roughness=0.22, metallic=0.55)
+    g.add(M.new_object("can_body", M.lathe("cola_can", _CAN, 40), silver, coll, pid))
+    sleeve = g.add(M.new_object("can_label", M.unit_cylinder(40, cap=False), label, coll, pid))
+    sleeve.location, sleeve.scale = (0, 0, 0.010), (0.0332, 0.0332, 0.094)
+    rim = g.add(M.new_object("can_rim", M.unit_torus(1.0, 0.06), silver, coll, pid))
+    rim.location, rim.scale = (0, 0, 0.116), (0.0275, 0.0275, 0.0275)
+    g.add(M.box("can_tab", (0.008, 0, 0.1166), (0.019, 0.011, 0.0008), silver, coll, pid, rounded=0.4))
     return g
 
 

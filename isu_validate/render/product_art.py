@@ -1,0 +1,129 @@
+"""Printed and displayed surfaces of the things in the cabin, drawn in code (numpy), so every pixel is the
+project's own and redistributable: a generic cola label (no brand, no trademark: a red band, a white
+wave and the word COLA in a blocky type drawn here) and a phone's home screen (wallpaper, status bar,
+app icons, dock). Deterministic: the same image on every machine.
+
+Images are float32 RGBA in [0, 1], row 0 at the top (the Blender worker flips them for ``Image.pixels``).
+Host-side and bpy-free, so they can be tested and looked at without Blender."""
+from __future__ import annotations
+
+import numpy as np
+
+# a 5x7 block type for the few letters a label needs
+_GLYPHS = {
+    "C": ["01111", "10000", "10000", "10000", "10000", "10000", "01111"],
+    "O": ["01110", "10001", "10001", "10001", "10001", "10001", "01110"],
+    "L": ["10000", "10000", "10000", "10000", "10000", "10000", "11111"],
+    "A": ["01110", "10001", "10001", "11111", "10001", "10001", "10001"],
+}
+
+RED = (0.72, 0.03, 0.04)
+WHITE = (0.95, 0.94, 0.92)
+
+
+def cola_label(width: int = 512, height: int = 128) -> np.ndarray:
+    """A label wrapped once round a bottle or can (u round it, v up): red, a white wave across it and
+    COLA twice, on opposite sides."""
+    img = np.empty((height, width, 4), np.float32)
+    img[..., :3], img[..., 3] = RED, 1.0
+    u = np.arange(width)[None, :] / width
+    v = 1.0 - np.arange(height)[:, None] / height          # up the label
+    wave = 0.28 + 0.09 * np.sin(2 * np.pi * (2 * u + 0.15))
+    ribbon = (v > wave) & (v < wave + 0.07 + 0.03 * np.sin(2 * np.pi * (2 * u)))
+    img[ribbon, :3] = WHITE
+    for centre in (0.25, 0.75):
+        _text(img, "COLA", (centre, 0.66), height * 0.40, WHITE)
+    return img
+
+
+def home_screen(width: int = 144, height: int = 304, seed: int = 3) -> np.ndarray:
+    """A phone's lit home screen: a soft gradient wallpaper, a status bar, a 4x5 grid of app icons
+    (rounded squares in assorted colours) and a dock of four."""
+    rng = np.random.default_rng(seed)
+    img = np.empty((height, width, 4), np.float32)
+    y = np.linspace(0.0, 1.0, height)[:, None, None]
+    top, bottom = np.array([0.16, 0.34, 0.62]), np.array([0.42, 0.20, 0.46])
+    img[..., :3] = top * (1 - y) + bottom * y
+    img[..., 3] = 1.0
+    img[: height // 28, :, :3] *= 0.6                      # status bar
+    cols, rows, size = 4, 5, width // 6
+    gap_x = (width - cols * size) / (cols + 1)
+    for r in range(rows):
+        for c in range(cols):
+            x0 = int(gap_x + c * (size + gap_x))
+            y0 = int(height * 0.10 + r * size * 1.55)
+            _icon(img, x0, y0, size, rng)
+    dock_y = int(height * 0.86)
+    img[dock_y - size // 4: dock_y + size + size // 4, :, :3] = img[dock_y - size // 4: dock_y + size + size // 4, :, :3] * 0.7 + 0.12
+    for c in range(cols):
+        _icon(img, int(gap_x + c * (size + gap_x)), dock_y, size, rng)
+    return img
+
+
+def _icon(img: np.ndarray, x0: int, y0: int, size: int, rng) -> None:
+    hue = rng.random()
+    colour = np.clip(np.abs((hue * 6 + np.array([0, 4, 2])) % 6 - 3) - 1, 0, 1) * 0.85 + 0.1
+    yy, xx = np.mgrid[0:size, 0:size]
+    r = size * 0.25
+    dx = np.maximum(np.maximum(r - xx, xx - (size - 1 - r)), 0)
+    dy = np.maximum(np.maximum(r - yy, yy - (size - 1 - r)), 0)
+    inside = dx ** 2 + dy ** 2 <= r ** 2
+    patch = img[y0:y0 + size, x0:x0 + size, :3]
+    patch[inside[:patch.shape[0], :patch.shape[1]]] = colour
+    glyph = (np.abs(xx - size / 2) < size * 0.18) & (np.abs(yy - size / 2) < size * 0.18)   # a white mark
+    patch[(glyph & inside)[:patch.shape[0], :patch.shape[1]]] = WHITE
+
+
+def _text(img: np.ndarray, text: str, centre: tuple[float, float], cap_height: float, colour) -> None:
+    """Block letters of ``cap_height`` px centred at (u, v) (fractions of the image)."""
+    h, w = img.shape[:2]
+    cell = cap_height / 7
+    advance = 6 * cell
+    x = centre[0] * w - advance * len(text) / 2 + cell / 2
+    y = (1 - centre[1]) * h - cap_height / 2
+    for ch in text:
+        for row, bits in enumerate(_GLYPHS[ch]):
+            for col, bit in enumerate(bits):
+                if bit == "1":
+                    r0, c0 = int(y + row * cell), int(x + col * cell)
+                    img[r0:int(r0 + cell + 1.5), c0:int(c0 + cell + 1.5), :3] = colour   # cells overlap: bold
+        x += advance
+
+
+def navigation_screen(width: int = 260, height: int = 150, seed: int = 5) -> np.ndarray:
+    """A car's centre display showing a map: pale blocks, grey streets, a blue route and a header bar."""
+    rng = np.random.default_rng(seed)
+    img = np.empty((height, width, 4), np.float32)
+    img[..., :3], img[..., 3] = (0.86, 0.87, 0.84), 1.0
+    for _ in range(9):                               # streets
+        if rng.random() < 0.5:
+            y = int(rng.integers(10, height)); img[y:y + 4, :, :3] = 0.97
+        else:
+            x = int(rng.integers(0, width)); img[:, x:x + 4, :3] = 0.97
+    park = rng.integers(0, [width - 60, height - 40])
+    img[park[1]:park[1] + 30, park[0]:park[0] + 50, :3] = (0.70, 0.84, 0.66)
+    route_y = height // 2
+    img[route_y:route_y + 5, width // 6:width * 5 // 6, :3] = (0.15, 0.45, 0.95)
+    img[route_y - 40:route_y + 5, width * 5 // 6 - 5:width * 5 // 6, :3] = (0.15, 0.45, 0.95)
+    img[:height // 8, :, :3] = (0.12, 0.13, 0.16)    # header bar
+    return img
+
+
+def instrument_dial(size: int = 128) -> np.ndarray:
+    """One round gauge of an instrument cluster: a black face, white tick marks round 270 degrees,
+    a red needle."""
+    img = np.zeros((size, size, 4), np.float32)
+    img[..., 3] = 1.0
+    yy, xx = np.mgrid[0:size, 0:size]
+    dx, dy = (xx - size / 2) / (size / 2), (size / 2 - yy) / (size / 2)
+    r, angle = np.hypot(dx, dy), np.degrees(np.arctan2(dy, dx))
+    img[..., :3] = 0.02
+    sweep = ~((angle < -45) & (angle > -135))           # all but the bottom quarter
+    ticks = sweep & (r > 0.78) & (r < 0.92) & (np.abs((angle + 360) % 22.5 - 11.25) > 9.5)
+    img[ticks, :3] = 0.9
+    needle_dir = np.radians(150)
+    along = dx * np.cos(needle_dir) + dy * np.sin(needle_dir)
+    across = np.abs(-dx * np.sin(needle_dir) + dy * np.cos(needle_dir))
+    img[(along > 0) & (along < 0.8) & (across < 0.035), :3] = (0.9, 0.1, 0.05)
+    img[r > 0.97, :3] = 0.35                               # chrome ring
+    return img
