@@ -111,6 +111,18 @@ _BOTTLE = [(0.0, 0.0), (0.030, 0.001), (0.040, 0.006), (0.044, 0.018), (0.044, 0
            (0.041, 0.104), (0.044, 0.110), (0.044, 0.185), (0.040, 0.205), (0.030, 0.228), (0.020, 0.243),
            (0.0135, 0.252), (0.0135, 0.258), (0.0175, 0.259), (0.0175, 0.262), (0.0135, 0.263),
            (0.0135, 0.268), (0.0, 0.268)]
+_FILL = 0.215    # the cola's level in a full bottle (m above the base)
+
+
+def _clear_plastic():
+    """Clear PET: refracting, glossy, nearly colourless."""
+    mat = M.material("pet_clear", (0.9, 0.93, 0.92), roughness=0.04, specular=0.8)
+    bsdf = mat.node_tree.nodes["Principled BSDF"]
+    bsdf.inputs["Transmission Weight"].default_value = 1.0
+    bsdf.inputs["IOR"].default_value = 1.45
+    return mat
+
+
 # a 330 ml can: domed base, body, necked top
 _CAN = [(0.0, 0.004), (0.026, 0.0), (0.031, 0.003), (0.033, 0.010), (0.033, 0.104), (0.0295, 0.113),
         (0.0285, 0.116), (0.0, 0.116)]
@@ -122,9 +134,14 @@ def build_cola_bottle(coll, instance: str) -> Group:
     g = Group(instance, coll)
     pid = INSTANCE_ID[instance]
     cola = M.material("cola_in_pet", (0.035, 0.010, 0.004), roughness=0.04, specular=1.0)
+    pet = _clear_plastic()
     label = M.image_material("cola_label", art.cola_label(), "cylinder", roughness=0.35, specular=0.6)
     cap = M.material("cola_cap", (0.60, 0.015, 0.015), roughness=0.45)
-    g.add(M.new_object("bottle_body", M.lathe("cola_bottle", _BOTTLE, 40), cola, coll, pid))
+    # filled to the shoulder: below, cola seen through the plastic; above, the clear, empty neck
+    g.add(M.new_object("bottle_cola", M.lathe("cola_bottle_full", [p for p in _BOTTLE if p[1] <= _FILL]
+                                             + [(0.0, _FILL)], 40), cola, coll, pid))
+    g.add(M.new_object("bottle_neck", M.lathe("cola_bottle_empty", [(0.0, _FILL)]
+                                             + [p for p in _BOTTLE if p[1] > _FILL], 40), pet, coll, pid))
     sleeve = g.add(M.new_object("bottle_label", M.unit_cylinder(40, cap=False), label, coll, pid))
     sleeve.location, sleeve.scale = (0, 0, 0.118), (0.0446, 0.0446, 0.062)
     g.add(M.cylinder("bottle_cap", (0, 0, 0.266), 0.0158, 0.022, cap, coll, pid, 24))
