@@ -9,13 +9,25 @@ from __future__ import annotations
 
 import numpy as np
 
-# a 5x7 block type for the few letters a label needs
-_GLYPHS = {
-    "C": ["01111", "10000", "10000", "10000", "10000", "10000", "01111"],
-    "O": ["01110", "10001", "10001", "10001", "10001", "10001", "01110"],
-    "L": ["10000", "10000", "10000", "10000", "10000", "10000", "11111"],
-    "A": ["01110", "10001", "10001", "11111", "10001", "10001", "10001"],
+def _arc(cx, cy, rx, ry, a0, a1, n=14):
+    return [(cx + rx * np.cos(np.radians(a)), cy + ry * np.sin(np.radians(a))) for a in np.linspace(a0, a1, n)]
+
+
+# a stroke type for the few characters the label and the lock screen need: polylines in a unit cell
+# (x right, y up), drawn with round pen ends, so letters have the curves of printed type
+_STROKES = {
+    "C": [_arc(0.55, 0.5, 0.45, 0.5, 50, 310)],
+    "O": [_arc(0.5, 0.5, 0.45, 0.5, 0, 360, 24)],
+    "L": [[(0.12, 1.0), (0.12, 0.0), (0.85, 0.0)]],
+    "A": [[(0.0, 0.0), (0.5, 1.0), (1.0, 0.0)], [(0.22, 0.38), (0.78, 0.38)]],
+    "0": [_arc(0.5, 0.5, 0.4, 0.5, 0, 360, 24)],
+    "1": [[(0.3, 0.78), (0.55, 1.0), (0.55, 0.0)]],
+    "2": [_arc(0.5, 0.72, 0.38, 0.28, 160, -20, 10) + [(0.1, 0.0), (0.9, 0.0)]],
+    "3": [_arc(0.5, 0.75, 0.36, 0.25, 150, -90, 12), _arc(0.5, 0.27, 0.4, 0.27, 90, -150, 12)],
+    "4": [[(0.7, 0.0), (0.7, 1.0), (0.08, 0.3), (0.95, 0.3)]],
+    ":": [[(0.5, 0.22), (0.5, 0.22)], [(0.5, 0.72), (0.5, 0.72)]],
 }
+_WIDTH = {":": 0.5, "1": 0.75}
 
 RED = (0.72, 0.03, 0.04)
 WHITE = (0.95, 0.94, 0.92)
@@ -32,7 +44,7 @@ def cola_label(width: int = 512, height: int = 128) -> np.ndarray:
     ribbon = (v > wave) & (v < wave + 0.07 + 0.03 * np.sin(2 * np.pi * (2 * u)))
     img[ribbon, :3] = WHITE
     for centre in (0.25, 0.75):
-        _text(img, "COLA", (centre, 0.66), height * 0.40, WHITE)
+        _text(img, "COLA", (centre, 0.68), height * 0.42, WHITE, weight=0.22, slant=0.18)
     return img
 
 
@@ -54,9 +66,28 @@ def home_screen(width: int = 144, height: int = 304, seed: int = 3) -> np.ndarra
             y0 = int(height * 0.10 + r * size * 1.55)
             _icon(img, x0, y0, size, rng)
     dock_y = int(height * 0.86)
-    img[dock_y - size // 4: dock_y + size + size // 4, :, :3] = img[dock_y - size // 4: dock_y + size + size // 4, :, :3] * 0.7 + 0.12
+    dock = img[dock_y - size // 4: dock_y + size + size // 4, :, :3]
+    dock[:] = dock * 0.7 + 0.12                            # the dock's frosted band
     for c in range(cols):
         _icon(img, int(gap_x + c * (size + gap_x)), dock_y, size, rng)
+    return img
+
+
+def lock_screen(width: int = 144, height: int = 304) -> np.ndarray:
+    """A phone's lock screen, lit by a notification: a dusk wallpaper, a large clock, one notification
+    card and the home bar."""
+    img = np.empty((height, width, 4), np.float32)
+    y = np.linspace(0.0, 1.0, height)[:, None, None]
+    top, bottom = np.array([0.05, 0.10, 0.30]), np.array([0.75, 0.35, 0.25])
+    img[..., :3], img[..., 3] = top * (1 - y) + bottom * y, 1.0
+    _text(img, "10:24", (0.5, 0.80), height * 0.09, WHITE, weight=0.12)
+    card = (slice(int(height * 0.36), int(height * 0.46)), slice(int(width * 0.06), int(width * 0.94)))
+    img[card[0], card[1], :3] = img[card[0], card[1], :3] * 0.3 + 0.65       # frosted card
+    _icon(img, int(width * 0.10), int(height * 0.375), width // 8, np.random.default_rng(1))
+    for k, length in enumerate((0.55, 0.40)):                                # two lines of grey text
+        r0 = int(height * (0.380 + 0.035 * k))
+        img[r0:r0 + 3, int(width * 0.28):int(width * (0.28 + length)), :3] = 0.35
+    img[int(height * 0.965):int(height * 0.975), int(width * 0.35):int(width * 0.65), :3] = WHITE
     return img
 
 
@@ -70,24 +101,38 @@ def _icon(img: np.ndarray, x0: int, y0: int, size: int, rng) -> None:
     inside = dx ** 2 + dy ** 2 <= r ** 2
     patch = img[y0:y0 + size, x0:x0 + size, :3]
     patch[inside[:patch.shape[0], :patch.shape[1]]] = colour
-    glyph = (np.abs(xx - size / 2) < size * 0.18) & (np.abs(yy - size / 2) < size * 0.18)   # a white mark
+    d = np.hypot(xx - (size - 1) / 2, yy - (size - 1) / 2) / size
+    glyph = [d < 0.2, (d > 0.13) & (d < 0.24),                             # a white mark: dot, ring, bars
+             (np.abs(xx - size / 2) < size * 0.25) & (np.abs(yy % (size / 4) - size / 8) < size * 0.05)
+             & (yy > size * 0.2) & (yy < size * 0.8)][int(rng.integers(3))]
     patch[(glyph & inside)[:patch.shape[0], :patch.shape[1]]] = WHITE
 
 
-def _text(img: np.ndarray, text: str, centre: tuple[float, float], cap_height: float, colour) -> None:
-    """Block letters of ``cap_height`` px centred at (u, v) (fractions of the image)."""
+def _text(img: np.ndarray, text: str, centre: tuple[float, float], cap_height: float, colour,
+          weight: float = 0.16, slant: float = 0.0) -> None:
+    """Stroke letters of ``cap_height`` px centred at (u, v) (fractions of the image), pen width
+    ``weight`` of the height, leaning by ``slant`` (italic), anti-aliased."""
     h, w = img.shape[:2]
-    cell = cap_height / 7
-    advance = 6 * cell
-    x = centre[0] * w - advance * len(text) / 2 + cell / 2
-    y = (1 - centre[1]) * h - cap_height / 2
-    for ch in text:
-        for row, bits in enumerate(_GLYPHS[ch]):
-            for col, bit in enumerate(bits):
-                if bit == "1":
-                    r0, c0 = int(y + row * cell), int(x + col * cell)
-                    img[r0:int(r0 + cell + 1.5), c0:int(c0 + cell + 1.5), :3] = colour   # cells overlap: bold
-        x += advance
+    advance = [cap_height * (_WIDTH.get(ch, 0.8) + 0.25) for ch in text]
+    x = centre[0] * w - sum(advance) / 2
+    base = (1 - centre[1]) * h + cap_height / 2                  # pixel row of the baseline
+    pen = weight * cap_height / 2
+    yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
+    ink = np.zeros((h, w), np.float32)
+    for ch, step in zip(text, advance):
+        for line in _STROKES[ch]:
+            pts = [(x + cap_height * (px * _WIDTH.get(ch, 0.8) + slant * py), base - cap_height * py)
+                   for px, py in line]
+            for (x0, y0), (x1, y1) in zip(pts, pts[1:]):
+                ink = np.maximum(ink, np.clip(pen + 0.5 - _segment_distance(xx, yy, x0, y0, x1, y1), 0, 1))
+        x += step
+    img[..., :3] = img[..., :3] * (1 - ink[..., None]) + np.asarray(colour, np.float32) * ink[..., None]
+
+
+def _segment_distance(xx, yy, x0, y0, x1, y1):
+    dx, dy = x1 - x0, y1 - y0
+    t = np.clip(((xx - x0) * dx + (yy - y0) * dy) / max(dx * dx + dy * dy, 1e-9), 0, 1)
+    return np.hypot(xx - x0 - t * dx, yy - y0 - t * dy)
 
 
 def navigation_screen(width: int = 260, height: int = 150, seed: int = 5) -> np.ndarray:

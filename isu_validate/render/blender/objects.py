@@ -12,6 +12,7 @@ from mathutils import Vector
 from ..cabin_geometry import CHILD_SEAT_PADS, child_seat_boxes, pitch
 from ..labels import INSTANCE_ID
 from .. import product_art as art
+from . import materials
 from . import mesh as M
 from .cabin import euler_deg
 
@@ -76,10 +77,10 @@ def build_luggage(coll) -> tuple[Group, bpy.types.Material]:
     return g, body_mat
 
 
-def build_phone(coll, instance: str, screen_on: bool = True) -> Group:
+def build_phone(coll, instance: str, lock_screen: bool = False) -> Group:
     """A 152 x 74 x 8.5 mm smartphone centred on its origin, long axis along local y, screen on local +z:
-    a case round it, black glass in front with a thin bezel round the screen (lit with a home screen
-    while in use in the hand, dark and reflecting when it lies unused on the co-driver seat), and a
+    a case round it, black glass in front with a thin bezel round the lit screen (a home screen while in
+    use in the hand; the lock screen, lit by a notification, when it lies on the co-driver seat), and a
     camera bump with two lenses and a flash on its back."""
     g = Group(instance, coll)
     pid = INSTANCE_ID[instance]
@@ -92,7 +93,7 @@ def build_phone(coll, instance: str, screen_on: bool = True) -> Group:
     g.add(M.box("phone_front", (0, 0, 0.0043), (0.071, 0.149, 0.0008), glass, coll, pid, rounded=0.06))
     if screen_on:
         screen = M.image_material("phone_home_screen", art.home_screen(), "plane", roughness=0.05,
-                                  emission_strength=2.0, specular=0.9)
+                                  emission_strength=1.6, specular=0.9)
         g.add(M.box("phone_screen", (0, 0, 0.0048), (0.066, 0.143, 0.0002), screen, coll, pid))
     g.add(M.box("phone_camera_bump", (-0.018, 0.053, -0.0050), (0.026, 0.032, 0.0018), glass, coll, pid,
                 rounded=0.25))
@@ -114,15 +115,6 @@ _BOTTLE = [(0.0, 0.0), (0.030, 0.001), (0.040, 0.006), (0.044, 0.018), (0.044, 0
 _FILL = 0.215    # the cola's level in a full bottle (m above the base)
 
 
-def _clear_plastic():
-    """Clear PET: refracting, glossy, nearly colourless."""
-    mat = M.material("pet_clear", (0.9, 0.93, 0.92), roughness=0.04, specular=0.8)
-    bsdf = mat.node_tree.nodes["Principled BSDF"]
-    bsdf.inputs["Transmission Weight"].default_value = 1.0
-    bsdf.inputs["IOR"].default_value = 1.45
-    return mat
-
-
 # a 330 ml can: domed base, body, necked top
 _CAN = [(0.0, 0.004), (0.026, 0.0), (0.031, 0.003), (0.033, 0.010), (0.033, 0.104), (0.0295, 0.113),
         (0.0285, 0.116), (0.0, 0.116)]
@@ -133,8 +125,9 @@ def build_cola_bottle(coll, instance: str) -> Group:
     its cap: dark cola behind glossy plastic, a printed label round the body, a ridged red cap."""
     g = Group(instance, coll)
     pid = INSTANCE_ID[instance]
-    cola = M.material("cola_in_pet", (0.035, 0.010, 0.004), roughness=0.04, specular=1.0)
-    pet = _clear_plastic()
+    # cola behind PET: glossy, nearly opaque, a dark red-brown where light comes through its edges
+    cola = materials.see_through("cola_in_pet", (0.030, 0.008, 0.003), (0.55, 0.16, 0.05), 0.88, 0.04, 1.0)
+    pet = materials.see_through("pet_clear", (0.8, 0.82, 0.82), (0.92, 0.95, 0.94), 0.3, 0.04, 0.9)
     label = M.image_material("cola_label", art.cola_label(), "cylinder", roughness=0.35, specular=0.6)
     cap = M.material("cola_cap", (0.60, 0.015, 0.015), roughness=0.45)
     # filled to the shoulder: below, cola seen through the plastic; above, the clear, empty neck
@@ -169,7 +162,7 @@ def build_can(coll, instance: str) -> Group:
 
 
 def build_phone_lying(coll, instance: str) -> Group:
-    return build_phone(coll, instance, screen_on=False)
+    return build_phone(coll, instance, lock_screen=True)
 
 
 # ---------------------------------------------------------------------- what a scene asks for
