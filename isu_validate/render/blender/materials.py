@@ -42,3 +42,33 @@ def math_node(nodes, links, operation: str, a, b=None, c=None):
         if value is not None:
             node.inputs[k].default_value = value
     return node.outputs[0]
+
+
+def woven(name: str, colour, roughness: float = 0.9) -> bpy.types.Material:
+    """Woven fabric (child-seat pads, straps): a mottled tone and a fine weave in the bump, both from
+    noise in the object's own coordinates, so they scale with the part."""
+    mat = M.material(name, colour, roughness=roughness, specular=0.2)
+    if mat.get("_isu_woven"):
+        return mat
+    nodes, links = mat.node_tree.nodes, mat.node_tree.links
+    bsdf = nodes["Principled BSDF"]
+    coords = nodes.new("ShaderNodeTexCoord")
+    mottle = nodes.new("ShaderNodeTexNoise")
+    mottle.inputs["Scale"].default_value = 12.0
+    links.new(coords.outputs["Object"], mottle.inputs["Vector"])
+    tone = nodes.new("ShaderNodeMix")
+    tone.data_type, tone.blend_type = "RGBA", "MULTIPLY"
+    links.new(mottle.outputs["Fac"], tone.inputs[0])
+    tone.inputs[6].default_value = (*colour, 1.0)
+    tone.inputs[7].default_value = (1.35, 1.3, 1.3, 1.0)
+    links.new(tone.outputs[2], bsdf.inputs["Base Color"])
+    weave = nodes.new("ShaderNodeTexWave")
+    weave.wave_type, weave.bands_direction = "BANDS", "DIAGONAL"
+    weave.inputs["Scale"].default_value = 60.0
+    links.new(coords.outputs["Object"], weave.inputs["Vector"])
+    bump = nodes.new("ShaderNodeBump")
+    bump.inputs["Strength"].default_value = 0.25
+    links.new(weave.outputs["Fac"], bump.inputs["Height"])
+    links.new(bump.outputs["Normal"], bsdf.inputs["Normal"])
+    mat["_isu_woven"] = True
+    return mat

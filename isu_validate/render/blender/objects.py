@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 
 import bpy
+import numpy as np
 from mathutils import Vector
 
 from ..cabin_geometry import CHILD_SEAT_PADS, child_seat_boxes, pitch
@@ -48,14 +49,42 @@ def build_child_seat(coll, front_facing: bool) -> Group:
     g = Group("child_seat_" + ("front" if front_facing else "rear"), coll)
     pid = INSTANCE_ID["child_seat"]
     shell = M.material("child_seat_shell", (0.03, 0.03, 0.035), roughness=0.6)
-    pad = M.material("child_seat_pad", (0.30, 0.02, 0.02), roughness=0.9)
-    for box in child_seat_boxes(front_facing):
+    pad = materials.woven("child_seat_pad", (0.30, 0.02, 0.02))
+    boxes = child_seat_boxes(front_facing)
+    for box in boxes:
         g.add(M.box(box.name, box.centre, box.size, pad if box.name in CHILD_SEAT_PADS else shell, coll, pid,
                     rounded=box.rounded, rotation=(0, pitch(box), 0)))
+    _harness(g, {b.name: b for b in boxes}, front_facing, pid)
     if not front_facing:
         handle = g.add(M.new_object("cs_handle", M.unit_torus(1.0, 0.09), shell, coll, pid))
         handle.location, handle.rotation_euler, handle.scale = (0.0, 0, 0.30), (math.pi / 2, 0, 0), (0.2, 0.2, 0.2)
     return g
+
+
+# the five-point harness on the pads: (pad, offset from the pad's centre along its own axes, size)
+_STRAPS = {True: [("cs_backpad", (0.017, y, 0.03), (0.004, 0.035, 0.40)) for y in (0.06, -0.06)]
+                 + [("cs_cushion", (0.0, 0.0, 0.032), (0.14, 0.035, 0.004))],
+           False: [("cs_platepad", (-0.04, y, 0.017), (0.34, 0.035, 0.004)) for y in (0.06, -0.06)]
+                  + [("cs_platepad", (0.20, 0.0, 0.017), (0.10, 0.035, 0.004))]}
+_BUCKLE = {True: ("cs_cushion", (0.05, 0.0, 0.038)), False: ("cs_platepad", (0.14, 0.0, 0.024))}
+
+
+def _harness(g: Group, boxes: dict, front_facing: bool, pid: int) -> None:
+    """Shoulder and crotch straps lying on the pads and the buckle with its red release button."""
+    strap = materials.woven("child_seat_strap", (0.018, 0.018, 0.02), roughness=0.7)
+    buckle = M.material("child_seat_buckle", (0.02, 0.02, 0.022), roughness=0.35)
+    button = M.material("child_seat_button", (0.55, 0.02, 0.02), roughness=0.4)
+
+    def on(pad: str, offset, size, mat, name):
+        box = boxes[pad]
+        centre = np.asarray(box.centre) + box.R @ np.asarray(offset)
+        g.add(M.box(name, tuple(centre), size, mat, g.coll, pid, rounded=0.2, rotation=(0, pitch(box), 0)))
+
+    for k, (pad, offset, size) in enumerate(_STRAPS[front_facing]):
+        on(pad, offset, size, strap, f"cs_strap{k}")
+    pad, offset = _BUCKLE[front_facing]
+    on(pad, offset, (0.035, 0.045, 0.014), buckle, "cs_buckle")
+    on(pad, (offset[0] + 0.004, 0.0, offset[2] + 0.008), (0.016, 0.022, 0.004), button, "cs_buckle_button")
 
 
 def build_luggage(coll) -> tuple[Group, bpy.types.Material]:
@@ -71,9 +100,18 @@ def build_luggage(coll) -> tuple[Group, bpy.types.Material]:
     zip_metal = M.material("luggage_zip", (0.55, 0.55, 0.57), roughness=0.3, metallic=1.0)
     g.add(M.box("lug_zip", (0, 0, 0.295), (0.2375, 0.4075, 0.003), zip_metal, coll, pid))   # the zip in the seam
     g.add(M.box("lug_zip_pull", (0.119, 0.10, 0.285), (0.004, 0.012, 0.028), zip_metal, coll, pid, rounded=0.3))
-    g.add(M.box("lug_handle", (0, 0, 0.585), (0.04, 0.14, 0.025), dark, coll, pid, rounded=0.3))
+    g.add(M.box("lug_handle", (0.03, 0, 0.585), (0.04, 0.14, 0.025), dark, coll, pid, rounded=0.3))
+    # the telescopic trolley handle, pushed down: two aluminium tubes and the grip, at the back
+    alu = M.material("luggage_alu", (0.45, 0.46, 0.48), roughness=0.35, metallic=1.0)
+    for k, y in enumerate((0.10, -0.10)):
+        tube = g.add(M.new_object(f"lug_tube{k}", M.unit_cylinder(12), alu, coll, pid))
+        M.place_segment(tube, Vector((-0.085, y, 0.56)), Vector((-0.085, y, 0.60)), 0.008)
+    g.add(M.box("lug_grip", (-0.085, 0, 0.605), (0.03, 0.23, 0.022), dark, coll, pid, rounded=0.4))
+    # four spinner wheels, each in its housing under a corner
     for k, (x, y) in enumerate(((0.08, 0.16), (0.08, -0.16), (-0.08, 0.16), (-0.08, -0.16))):
-        g.add(M.cylinder(f"lug_wheel{k}", (x, y, 0.0), 0.022, 0.025, dark, coll, pid, 10))
+        g.add(M.box(f"lug_wheel_housing{k}", (x, y, 0.035), (0.05, 0.045, 0.03), dark, coll, pid, rounded=0.3))
+        wheel = g.add(M.new_object(f"lug_wheel{k}", M.unit_cylinder(16), dark, coll, pid))
+        M.place_segment(wheel, Vector((x, y - 0.011, 0.022)), Vector((x, y + 0.011, 0.022)), 0.022)
     return g, body_mat
 
 
@@ -91,10 +129,9 @@ def build_phone(coll, instance: str, lock_screen: bool = False) -> Group:
     flash = M.material("phone_flash", (0.8, 0.75, 0.6), roughness=0.3)
     g.add(M.box("phone_body", (0, 0, 0), (0.074, 0.152, 0.0085), case, coll, pid, rounded=0.15))
     g.add(M.box("phone_front", (0, 0, 0.0043), (0.071, 0.149, 0.0008), glass, coll, pid, rounded=0.06))
-    if screen_on:
-        screen = M.image_material("phone_home_screen", art.home_screen(), "plane", roughness=0.05,
-                                  emission_strength=1.6, specular=0.9)
-        g.add(M.box("phone_screen", (0, 0, 0.0048), (0.066, 0.143, 0.0002), screen, coll, pid))
+    name, image = ("phone_lock_screen", art.lock_screen) if lock_screen else ("phone_home_screen", art.home_screen)
+    screen = M.image_material(name, image(), "plane", roughness=0.05, emission_strength=1.6, specular=0.9)
+    g.add(M.box("phone_screen", (0, 0, 0.0048), (0.066, 0.143, 0.0002), screen, coll, pid))
     g.add(M.box("phone_camera_bump", (-0.018, 0.053, -0.0050), (0.026, 0.032, 0.0018), glass, coll, pid,
                 rounded=0.25))
     for k, y in enumerate((0.061, 0.045)):
@@ -127,7 +164,7 @@ def build_cola_bottle(coll, instance: str) -> Group:
     pid = INSTANCE_ID[instance]
     # cola behind PET: glossy, nearly opaque, a dark red-brown where light comes through its edges
     cola = materials.see_through("cola_in_pet", (0.030, 0.008, 0.003), (0.55, 0.16, 0.05), 0.88, 0.04, 1.0)
-    pet = materials.see_through("pet_clear", (0.8, 0.82, 0.82), (0.92, 0.95, 0.94), 0.3, 0.04, 0.9)
+    pet = materials.see_through("pet_clear", (0.01, 0.01, 0.01), (0.93, 0.95, 0.94), 0.2, 0.03, 1.0)   # reflections only
     label = M.image_material("cola_label", art.cola_label(), "cylinder", roughness=0.35, specular=0.6)
     cap = M.material("cola_cap", (0.60, 0.015, 0.015), roughness=0.45)
     # filled to the shoulder: below, cola seen through the plastic; above, the clear, empty neck
