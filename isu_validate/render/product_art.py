@@ -74,11 +74,11 @@ def home_screen(width: int = 144, height: int = 304, seed: int = 3) -> np.ndarra
 
 
 def lock_screen(width: int = 144, height: int = 304) -> np.ndarray:
-    """A phone's lock screen, lit by a notification: a dusk wallpaper, a large clock, one notification
+    """A phone's lock screen, lit by a notification: a blue wallpaper, a large clock, one notification
     card and the home bar."""
     img = np.empty((height, width, 4), np.float32)
     y = np.linspace(0.0, 1.0, height)[:, None, None]
-    top, bottom = np.array([0.05, 0.10, 0.30]), np.array([0.75, 0.35, 0.25])
+    top, bottom = np.array([0.02, 0.05, 0.22]), np.array([0.10, 0.42, 0.55])   # night blue to teal
     img[..., :3], img[..., 3] = top * (1 - y) + bottom * y, 1.0
     _text(img, "10:24", (0.5, 0.80), height * 0.09, WHITE, weight=0.12)
     card = (slice(int(height * 0.36), int(height * 0.46)), slice(int(width * 0.06), int(width * 0.94)))

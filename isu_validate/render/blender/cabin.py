@@ -10,6 +10,7 @@ from ..cabin_geometry import RIM_TUBE, pitch, seat_boxes
 from ..cabin_geometry import wheel_frame as geometry_wheel_frame
 from .. import product_art as art
 from ..labels import INSTANCE_ID
+from . import materials
 from . import mesh as M
 
 # linear-RGB colours of a plausible dark-grey interior with lighter seats (so dark objects stand out)
@@ -77,9 +78,9 @@ def _pillar(name, p0, p1, mat, coll, pid):
 def _dashboard(s, plastic, trim, coll, pid):
     xf, hw, top = s["x_front"], s["half_width"], s["dashboard_top"]
     display = M.image_material("centre_display", art.navigation_screen(), "facing_back", roughness=0.08,
-                               emission_strength=1.2, specular=0.8)
+                               emission_strength=0.3, specular=0.8)   # night-dimmed: it must not light the cabin
     dial = M.image_material("instrument_dial", art.instrument_dial(), "facing_back", roughness=0.1,
-                            emission_strength=0.6, specular=0.8)
+                            emission_strength=0.25, specular=0.8)
     tilt = math.radians(-15)
     gauges = [M.box(f"gauge_{k}", (xf - 0.441, 0.37 + dy, top + 0.01), (0.002, 0.07, 0.07), dial, coll, pid)
               for k, dy in enumerate((0.045, -0.045))]
@@ -122,61 +123,13 @@ def _door_panels(s, plastic, trim, coll, pid):
 
 def _seat(name, seat, coll, pid):
     """Cushion, base, tilted backrest and headrest(s): the boxes of ``cabin_geometry.seat_boxes``."""
-    fabric = _seat_fabric()
+    fabric = materials.seat_cover("seat_fabric", FABRIC)
     plastic = M.material("plastic", PLASTIC)
     parts = []
     for box in seat_boxes(name, seat):
         parts.append(M.box(box.name, box.centre, box.size, plastic if box.name.endswith("_base") else fabric,
                            coll, pid, rotation=(0, pitch(box), 0), rounded=box.rounded))
     return parts
-
-
-def _seat_fabric():
-    """Woven seat cover: a mottled tone, and the two stitched seams that run down every cushion and
-    backrest, dividing its middle insert from the bolsters (drawn in each box's own coordinates)."""
-    mat = M.material("seat_fabric", FABRIC, roughness=0.95, specular=0.2)
-    if mat.get("_isu_fabric"):
-        return mat
-    nodes, links = mat.node_tree.nodes, mat.node_tree.links
-    bsdf = nodes["Principled BSDF"]
-    coords = nodes.new("ShaderNodeTexCoord")
-    noise = nodes.new("ShaderNodeTexNoise")
-    noise.inputs["Scale"].default_value = 30.0
-    noise.inputs["Detail"].default_value = 6.0
-    links.new(coords.outputs["Object"], noise.inputs["Vector"])
-    xyz = nodes.new("ShaderNodeSeparateXYZ")
-    links.new(coords.outputs["Object"], xyz.inputs["Vector"])
-    seam = _math(nodes, links, "ABSOLUTE", xyz.outputs["Y"])
-    seam = _math(nodes, links, "SUBTRACT", seam, 0.27)
-    seam = _math(nodes, links, "ABSOLUTE", seam)
-    seam = _math(nodes, links, "LESS_THAN", seam, 0.008)            # 1 on the seam
-    tone = nodes.new("ShaderNodeMix")
-    tone.data_type, tone.blend_type = "RGBA", "MULTIPLY"
-    links.new(noise.outputs["Fac"], tone.inputs[0])
-    tone.inputs[6].default_value = (*FABRIC, 1.0)
-    tone.inputs[7].default_value = (1.25, 1.2, 1.15, 1.0)
-    darker = nodes.new("ShaderNodeMix")
-    darker.data_type, darker.blend_type = "RGBA", "MULTIPLY"
-    links.new(seam, darker.inputs[0])
-    links.new(tone.outputs[2], darker.inputs[6])
-    darker.inputs[7].default_value = (0.45, 0.45, 0.45, 1.0)
-    links.new(darker.outputs[2], bsdf.inputs["Base Color"])
-    bump = nodes.new("ShaderNodeBump")
-    bump.invert = True                                               # the seam is a groove
-    bump.inputs["Strength"].default_value = 0.8
-    links.new(seam, bump.inputs["Height"])
-    links.new(bump.outputs["Normal"], bsdf.inputs["Normal"])
-    mat["_isu_fabric"] = True
-    return mat
-
-
-def _math(nodes, links, operation: str, a, b=None):
-    node = nodes.new("ShaderNodeMath")
-    node.operation = operation
-    links.new(a, node.inputs[0])
-    if b is not None:
-        node.inputs[1].default_value = b
-    return node.outputs[0]
 
 
 def wheel_frame(wheel: dict):

@@ -34,14 +34,68 @@ def see_through(name: str, colour, tint, opacity: float, roughness: float = 0.05
 
 
 def math_node(nodes, links, operation: str, a, b=None, c=None):
-    """A Math node on socket ``a`` with constant ``b`` (and ``c``); its output socket."""
+    """A Math node on socket ``a`` with ``b`` (and ``c``), each a socket or a constant; its output socket."""
     node = nodes.new("ShaderNodeMath")
     node.operation = operation
     links.new(a, node.inputs[0])
     for k, value in ((1, b), (2, c)):
-        if value is not None:
+        if isinstance(value, bpy.types.NodeSocket):
+            links.new(value, node.inputs[k])
+        elif value is not None:
             node.inputs[k].default_value = value
     return node.outputs[0]
+
+
+def seat_cover(name: str, colour) -> bpy.types.Material:
+    """A car seat's woven cover, in each box's own coordinates (-0.5..0.5 across, so it fits every seat
+    part): a mottled tone; a darker middle insert between two lengthwise stitched seams, quilted by
+    seams across it; the seams are grooves in the bump."""
+    mat = M.material(name, colour, roughness=0.95, specular=0.2)
+    if mat.get("_isu_cover"):
+        return mat
+    nodes, links = mat.node_tree.nodes, mat.node_tree.links
+    bsdf = nodes["Principled BSDF"]
+    coords = nodes.new("ShaderNodeTexCoord")
+    xyz = nodes.new("ShaderNodeSeparateXYZ")
+    links.new(coords.outputs["Object"], xyz.inputs["Vector"])
+    across = math_node(nodes, links, "ABSOLUTE", xyz.outputs["Y"])
+    insert = math_node(nodes, links, "LESS_THAN", across, 0.27)
+    lengthwise = math_node(nodes, links, "LESS_THAN",
+                           math_node(nodes, links, "ABSOLUTE", math_node(nodes, links, "SUBTRACT", across, 0.27)),
+                           0.008)
+    # along the part: x on a cushion's top, z up a backrest (the other is constant on that face)
+    along = math_node(nodes, links, "ADD", xyz.outputs["X"], xyz.outputs["Z"])
+    quilt = math_node(nodes, links, "LESS_THAN", math_node(nodes, links, "FRACT",
+                                                           math_node(nodes, links, "MULTIPLY", along, 6.0)), 0.035)
+    seam = math_node(nodes, links, "MAXIMUM", lengthwise, math_node(nodes, links, "MULTIPLY", quilt, insert))
+    noise = nodes.new("ShaderNodeTexNoise")
+    noise.inputs["Scale"].default_value = 30.0
+    noise.inputs["Detail"].default_value = 6.0
+    links.new(coords.outputs["Object"], noise.inputs["Vector"])
+    colour_out = _multiply(nodes, links, noise.outputs["Fac"], (*colour, 1.0), (1.25, 1.2, 1.15, 1.0))
+    colour_out = _multiply(nodes, links, insert, colour_out, (0.72, 0.72, 0.72, 1.0))
+    colour_out = _multiply(nodes, links, seam, colour_out, (0.45, 0.45, 0.45, 1.0))
+    links.new(colour_out, bsdf.inputs["Base Color"])
+    bump = nodes.new("ShaderNodeBump")
+    bump.invert = True                                               # a seam is a groove
+    bump.inputs["Strength"].default_value = 0.8
+    links.new(seam, bump.inputs["Height"])
+    links.new(bump.outputs["Normal"], bsdf.inputs["Normal"])
+    mat["_isu_cover"] = True
+    return mat
+
+
+def _multiply(nodes, links, factor, a, b):
+    """Colour ``a`` multiplied by colour ``b`` as far as ``factor`` (sockets or RGBA constants)."""
+    mix = nodes.new("ShaderNodeMix")
+    mix.data_type, mix.blend_type = "RGBA", "MULTIPLY"
+    links.new(factor, mix.inputs[0])
+    for k, value in ((6, a), (7, b)):
+        if isinstance(value, bpy.types.NodeSocket):
+            links.new(value, mix.inputs[k])
+        else:
+            mix.inputs[k].default_value = value
+    return mix.outputs[2]
 
 
 def woven(name: str, colour, roughness: float = 0.9) -> bpy.types.Material:

@@ -119,10 +119,10 @@ def build_phone(coll, instance: str, lock_screen: bool = False) -> Group:
     """A 152 x 74 x 8.5 mm smartphone centred on its origin, long axis along local y, screen on local +z:
     a case round it, black glass in front with a thin bezel round the lit screen (a home screen while in
     use in the hand; the lock screen, lit by a notification, when it lies on the co-driver seat), and a
-    camera bump with two lenses and a flash on its back."""
+    camera bump with three lenses and a flash on its back."""
     g = Group(instance, coll)
     pid = INSTANCE_ID[instance]
-    case = M.material("phone_case", (0.045, 0.06, 0.09), roughness=0.45)
+    case = M.material("phone_case", (0.012, 0.013, 0.016), roughness=0.3, specular=0.7)   # graphite
     glass = M.material("phone_glass", (0.004, 0.004, 0.005), roughness=0.03, specular=1.0)
     lens = M.material("phone_lens", (0.002, 0.002, 0.003), roughness=0.02, specular=1.0)
     ring = M.material("phone_lens_ring", (0.5, 0.5, 0.52), roughness=0.25, metallic=1.0)
@@ -132,13 +132,14 @@ def build_phone(coll, instance: str, lock_screen: bool = False) -> Group:
     name, image = ("phone_lock_screen", art.lock_screen) if lock_screen else ("phone_home_screen", art.home_screen)
     screen = M.image_material(name, image(), "plane", roughness=0.05, emission_strength=1.6, specular=0.9)
     g.add(M.box("phone_screen", (0, 0, 0.0048), (0.066, 0.143, 0.0002), screen, coll, pid))
-    g.add(M.box("phone_camera_bump", (-0.018, 0.053, -0.0050), (0.026, 0.032, 0.0018), glass, coll, pid,
+    g.add(M.box("phone_camera_bump", (-0.017, 0.051, -0.0050), (0.030, 0.036, 0.0018), glass, coll, pid,
                 rounded=0.25))
-    for k, y in enumerate((0.061, 0.045)):
-        g.add(M.cylinder(f"phone_lens_ring{k}", (-0.018, y, -0.0066), 0.0055, 0.0008, ring, coll, pid, 16))
-        g.add(M.cylinder(f"phone_lens{k}", (-0.018, y, -0.0070), 0.0042, 0.0011, lens, coll, pid, 16))
-    g.add(M.cylinder("phone_flash", (-0.008, 0.061, -0.0062), 0.0018, 0.0004, flash, coll, pid, 10))
-    for obj in g.parts[-5:]:
+    lenses = ((-0.024, 0.061), (-0.024, 0.043), (-0.010, 0.052))          # three cameras in a triangle
+    for k, (x, y) in enumerate(lenses):
+        g.add(M.cylinder(f"phone_lens_ring{k}", (x, y, -0.0066), 0.0052, 0.0008, ring, coll, pid, 16))
+        g.add(M.cylinder(f"phone_lens{k}", (x, y, -0.0070), 0.0040, 0.0011, lens, coll, pid, 16))
+    g.add(M.cylinder("phone_flash", (-0.008, 0.063, -0.0062), 0.0016, 0.0004, flash, coll, pid, 10))
+    for obj in g.parts[-(2 * len(lenses) + 1):]:
         obj.rotation_euler = (math.pi, 0, 0)      # the lenses face out of the back (-z)
         obj.location.z = -0.0059                  # on the bump's back face
     return g
@@ -149,7 +150,17 @@ _BOTTLE = [(0.0, 0.0), (0.030, 0.001), (0.040, 0.006), (0.044, 0.018), (0.044, 0
            (0.041, 0.104), (0.044, 0.110), (0.044, 0.185), (0.040, 0.205), (0.030, 0.228), (0.020, 0.243),
            (0.0135, 0.252), (0.0135, 0.258), (0.0175, 0.259), (0.0175, 0.262), (0.0135, 0.263),
            (0.0135, 0.268), (0.0, 0.268)]
-_FILL = 0.215    # the cola's level in a full bottle (m above the base)
+_FILL = 0.246    # the cola's level in a full bottle (m above the base): just into the neck, as bottled
+
+
+def _split_profile(profile, z: float):
+    """(the profile below height z, the profile above it), both closed on the axis at z."""
+    for (r0, z0), (r1, z1) in zip(profile, profile[1:]):
+        if z0 <= z < z1:
+            edge = (r0 + (r1 - r0) * (z - z0) / (z1 - z0), z)
+            return ([p for p in profile if p[1] < z] + [edge, (0.0, z)],
+                    [(0.0, z), edge] + [p for p in profile if p[1] > z])
+    raise ValueError(f"height {z} is outside the profile")
 
 
 # a 330 ml can: domed base, body, necked top
@@ -167,11 +178,10 @@ def build_cola_bottle(coll, instance: str) -> Group:
     pet = materials.see_through("pet_clear", (0.01, 0.01, 0.01), (0.93, 0.95, 0.94), 0.2, 0.03, 1.0)   # reflections only
     label = M.image_material("cola_label", art.cola_label(), "cylinder", roughness=0.35, specular=0.6)
     cap = M.material("cola_cap", (0.60, 0.015, 0.015), roughness=0.45)
-    # filled to the shoulder: below, cola seen through the plastic; above, the clear, empty neck
-    g.add(M.new_object("bottle_cola", M.lathe("cola_bottle_full", [p for p in _BOTTLE if p[1] <= _FILL]
-                                             + [(0.0, _FILL)], 40), cola, coll, pid))
-    g.add(M.new_object("bottle_neck", M.lathe("cola_bottle_empty", [(0.0, _FILL)]
-                                             + [p for p in _BOTTLE if p[1] > _FILL], 40), pet, coll, pid))
+    # filled into the neck: below, cola seen through the plastic; above, the clear, empty neck
+    full, empty = _split_profile(_BOTTLE, _FILL)
+    g.add(M.new_object("bottle_cola", M.lathe("cola_bottle_full", full, 40), cola, coll, pid))
+    g.add(M.new_object("bottle_neck", M.lathe("cola_bottle_empty", empty, 40), pet, coll, pid))
     sleeve = g.add(M.new_object("bottle_label", M.unit_cylinder(40, cap=False), label, coll, pid))
     sleeve.location, sleeve.scale = (0, 0, 0.118), (0.0446, 0.0446, 0.062)
     g.add(M.cylinder("bottle_cap", (0, 0, 0.266), 0.0158, 0.022, cap, coll, pid, 24))
