@@ -1,7 +1,7 @@
 """Printed and displayed surfaces of the things in the cabin, drawn in code (numpy), so every pixel is the
 project's own and redistributable: a generic cola label (no brand, no trademark: a red band, a white
-wave and the word COLA in a blocky type drawn here) and a phone's home screen (wallpaper, status bar,
-app icons, dock). Deterministic: the same image on every machine.
+wave and the word COLA in a stroke type drawn here) and a phone's home screen (wallpaper, status bar
+with the time, app icons, dock). Deterministic: the same image on every machine.
 
 Images are float32 RGBA in [0, 1], row 0 at the top (the Blender worker flips them for ``Image.pixels``).
 Host-side and bpy-free, so they can be tested and looked at without Blender."""
@@ -58,6 +58,9 @@ def home_screen(width: int = 144, height: int = 304, seed: int = 3) -> np.ndarra
     img[..., :3] = top * (1 - y) + bottom * y
     img[..., 3] = 1.0
     img[: height // 28, :, :3] *= 0.6                      # status bar
+    _text(img, "10:24", (0.16, 1 - 0.5 / 28), height / 28 * 0.6, WHITE, weight=0.2)
+    bar = height // 28
+    img[bar // 4: bar - bar // 4, width - width // 8: width - width // 20, :3] = WHITE   # battery
     cols, rows, size = 4, 5, width // 6
     gap_x = (width - cols * size) / (cols + 1)
     for r in range(rows):
@@ -70,24 +73,6 @@ def home_screen(width: int = 144, height: int = 304, seed: int = 3) -> np.ndarra
     dock[:] = dock * 0.7 + 0.12                            # the dock's frosted band
     for c in range(cols):
         _icon(img, int(gap_x + c * (size + gap_x)), dock_y, size, rng)
-    return img
-
-
-def lock_screen(width: int = 144, height: int = 304) -> np.ndarray:
-    """A phone's lock screen, lit by a notification: a blue wallpaper, a large clock, one notification
-    card and the home bar."""
-    img = np.empty((height, width, 4), np.float32)
-    y = np.linspace(0.0, 1.0, height)[:, None, None]
-    top, bottom = np.array([0.02, 0.05, 0.22]), np.array([0.10, 0.42, 0.55])   # night blue to teal
-    img[..., :3], img[..., 3] = top * (1 - y) + bottom * y, 1.0
-    _text(img, "10:24", (0.5, 0.80), height * 0.09, WHITE, weight=0.12)
-    card = (slice(int(height * 0.36), int(height * 0.46)), slice(int(width * 0.06), int(width * 0.94)))
-    img[card[0], card[1], :3] = img[card[0], card[1], :3] * 0.3 + 0.65       # frosted card
-    _icon(img, int(width * 0.10), int(height * 0.375), width // 8, np.random.default_rng(1))
-    for k, length in enumerate((0.55, 0.40)):                                # two lines of grey text
-        r0 = int(height * (0.380 + 0.035 * k))
-        img[r0:r0 + 3, int(width * 0.28):int(width * (0.28 + length)), :3] = 0.35
-    img[int(height * 0.965):int(height * 0.975), int(width * 0.35):int(width * 0.65), :3] = WHITE
     return img
 
 

@@ -115,11 +115,11 @@ def build_luggage(coll) -> tuple[Group, bpy.types.Material]:
     return g, body_mat
 
 
-def build_phone(coll, instance: str, lock_screen: bool = False) -> Group:
+def build_phone(coll, instance: str) -> Group:
     """A 152 x 74 x 8.5 mm smartphone centred on its origin, long axis along local y, screen on local +z:
-    a case round it, black glass in front with a thin bezel round the lit screen (a home screen while in
-    use in the hand; the lock screen, lit by a notification, when it lies on the co-driver seat), and a
-    camera bump with three lenses and a flash on its back."""
+    a graphite case round it, black glass in front with a thin bezel round the lit home screen (the same
+    model in the hand and on the co-driver seat), and a camera bump with three lenses and a flash on its
+    back."""
     g = Group(instance, coll)
     pid = INSTANCE_ID[instance]
     case = M.material("phone_case", (0.012, 0.013, 0.016), roughness=0.3, specular=0.7)   # graphite
@@ -129,8 +129,8 @@ def build_phone(coll, instance: str, lock_screen: bool = False) -> Group:
     flash = M.material("phone_flash", (0.8, 0.75, 0.6), roughness=0.3)
     g.add(M.box("phone_body", (0, 0, 0), (0.074, 0.152, 0.0085), case, coll, pid, rounded=0.15))
     g.add(M.box("phone_front", (0, 0, 0.0043), (0.071, 0.149, 0.0008), glass, coll, pid, rounded=0.06))
-    name, image = ("phone_lock_screen", art.lock_screen) if lock_screen else ("phone_home_screen", art.home_screen)
-    screen = M.image_material(name, image(), "plane", roughness=0.05, emission_strength=1.6, specular=0.9)
+    screen = M.image_material("phone_home_screen", art.home_screen(), "plane", roughness=0.05,
+                              emission_strength=1.6, specular=0.9)
     g.add(M.box("phone_screen", (0, 0, 0.0048), (0.066, 0.143, 0.0002), screen, coll, pid))
     g.add(M.box("phone_camera_bump", (-0.017, 0.051, -0.0050), (0.030, 0.036, 0.0018), glass, coll, pid,
                 rounded=0.25))
@@ -208,13 +208,9 @@ def build_can(coll, instance: str) -> Group:
     return g
 
 
-def build_phone_lying(coll, instance: str) -> Group:
-    return build_phone(coll, instance, lock_screen=True)
-
-
 # ---------------------------------------------------------------------- what a scene asks for
 # the things on the co-driver seat: feature -> (asset part, builder); the feature names the instance too
-ON_CODRIVER_SEAT = {"phone_codriver_seat": ("phone", build_phone_lying),
+ON_CODRIVER_SEAT = {"phone_codriver_seat": ("phone", build_phone),
                     "colacan_codriver_seat": ("colacan", build_can),
                     "colabottle_codriver_seat": ("colabottle", build_cola_bottle)}
 
