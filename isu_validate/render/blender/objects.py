@@ -96,10 +96,11 @@ def build_luggage(coll) -> tuple[Group, bpy.types.Material]:
     g.add(M.box("lug_body", (0, 0, 0.295), (0.23, 0.40, 0.55), body_mat, coll, pid, rounded=0.12))
     for k, y in enumerate((-0.12, -0.04, 0.04, 0.12)):  # moulded ribs
         g.add(M.box(f"lug_rib{k}", (0.117, y, 0.295), (0.006, 0.018, 0.48), body_mat, coll, pid, rounded=0.3))
-    g.add(M.box("lug_seam", (0, 0, 0.295), (0.236, 0.406, 0.012), dark, coll, pid))
+    # the zip runs round the sides and top between the front and back shells, its pull hanging at one side
+    g.add(M.box("lug_seam", (0, 0, 0.295), (0.012, 0.406, 0.556), dark, coll, pid, rounded=0.12))
     zip_metal = M.material("luggage_zip", (0.55, 0.55, 0.57), roughness=0.3, metallic=1.0)
-    g.add(M.box("lug_zip", (0, 0, 0.295), (0.2375, 0.4075, 0.003), zip_metal, coll, pid))   # the zip in the seam
-    g.add(M.box("lug_zip_pull", (0.119, 0.10, 0.285), (0.004, 0.012, 0.028), zip_metal, coll, pid, rounded=0.3))
+    g.add(M.box("lug_zip", (0, 0, 0.295), (0.003, 0.4075, 0.5575), zip_metal, coll, pid, rounded=0.12))
+    g.add(M.box("lug_zip_pull", (0.0, 0.205, 0.42), (0.010, 0.004, 0.03), zip_metal, coll, pid, rounded=0.3))
     g.add(M.box("lug_handle", (0.03, 0, 0.585), (0.04, 0.14, 0.025), dark, coll, pid, rounded=0.3))
     # the telescopic trolley handle, pushed down: two aluminium tubes and the grip, at the back
     alu = M.material("luggage_alu", (0.45, 0.46, 0.48), roughness=0.35, metallic=1.0)
