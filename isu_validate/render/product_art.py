@@ -127,9 +127,11 @@ def navigation_screen(width: int = 260, height: int = 150, seed: int = 5) -> np.
     img[..., :3], img[..., 3] = (0.86, 0.87, 0.84), 1.0
     for _ in range(9):                               # streets
         if rng.random() < 0.5:
-            y = int(rng.integers(10, height)); img[y:y + 4, :, :3] = 0.97
+            y = int(rng.integers(10, height))
+            img[y:y + 4, :, :3] = 0.97
         else:
-            x = int(rng.integers(0, width)); img[:, x:x + 4, :3] = 0.97
+            x = int(rng.integers(0, width))
+            img[:, x:x + 4, :3] = 0.97
     park = rng.integers(0, [width - 60, height - 40])
     img[park[1]:park[1] + 30, park[0]:park[0] + 50, :3] = (0.70, 0.84, 0.66)
     route_y = height // 2

@@ -164,11 +164,6 @@ def _split_profile(profile, z: float):
     raise ValueError(f"height {z} is outside the profile")
 
 
-# a 330 ml can: domed base, body, necked top
-_CAN = [(0.0, 0.004), (0.026, 0.0), (0.031, 0.003), (0.033, 0.010), (0.033, 0.104), (0.0295, 0.113),
-        (0.0285, 0.116), (0.0, 0.116)]
-
-
 def build_cola_bottle(coll, instance: str) -> Group:
     """A 1 l PET cola bottle lying or standing from its base (origin) along local +z, 0.29 m long with
     its cap: dark cola behind glossy plastic, a printed label round the body, a ridged red cap."""
@@ -176,7 +171,8 @@ def build_cola_bottle(coll, instance: str) -> Group:
     pid = INSTANCE_ID[instance]
     # cola behind PET: glossy, nearly opaque, a dark red-brown where light comes through its edges
     cola = materials.see_through("cola_in_pet", (0.030, 0.008, 0.003), (0.55, 0.16, 0.05), 0.88, 0.04, 1.0)
-    pet = materials.see_through("pet_clear", (0.01, 0.01, 0.01), (0.93, 0.95, 0.94), 0.2, 0.03, 1.0)   # reflections only
+    # the empty neck: clear, only its reflections seen (a black base colour)
+    pet = materials.see_through("pet_clear", (0.01, 0.01, 0.01), (0.93, 0.95, 0.94), 0.2, 0.03, 1.0)
     label = M.image_material("cola_label", art.cola_label(), "cylinder", roughness=0.35, specular=0.6)
     cap = M.material("cola_cap", (0.60, 0.015, 0.015), roughness=0.45)
     # filled into the neck: below, cola seen through the plastic; above, the clear, empty neck
@@ -191,6 +187,11 @@ def build_cola_bottle(coll, instance: str) -> Group:
         g.add(M.box(f"bottle_cap_ridge{k}", (0.0158 * math.cos(a), 0.0158 * math.sin(a), 0.277),
                     (0.0012, 0.0012, 0.018), cap, coll, pid, rotation=(0, 0, a)))
     return g
+
+
+# a 330 ml can: domed base, body, necked top
+_CAN = [(0.0, 0.004), (0.026, 0.0), (0.031, 0.003), (0.033, 0.010), (0.033, 0.104), (0.0295, 0.113),
+        (0.0285, 0.116), (0.0, 0.116)]
 
 
 def build_can(coll, instance: str) -> Group:
