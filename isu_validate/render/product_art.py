@@ -4,6 +4,9 @@ wave and the word COLA in a stroke type drawn here) and a phone's home screen (w
 with the time, app icons, dock). Deterministic: the same image on every machine.
 
 Images are float32 RGBA in [0, 1], row 0 at the top (the Blender worker flips them for ``Image.pixels``).
+Small on purpose: Cycles does not mip-map, so a texture many texels to a pixel (a can 25 px across in a
+frame) shimmers at 2 samples; these sizes keep a few texels a pixel in the frame and stay sharp enough in
+a close-up.
 Host-side and bpy-free, so they can be tested and looked at without Blender."""
 from __future__ import annotations
 
@@ -33,7 +36,7 @@ RED = (0.72, 0.03, 0.04)
 WHITE = (0.95, 0.94, 0.92)
 
 
-def cola_label(width: int = 512, height: int = 128) -> np.ndarray:
+def cola_label(width: int = 256, height: int = 64) -> np.ndarray:
     """A label wrapped once round a bottle or can (u round it, v up): red, a white wave across it and
     COLA twice, on opposite sides."""
     img = np.empty((height, width, 4), np.float32)
@@ -48,7 +51,7 @@ def cola_label(width: int = 512, height: int = 128) -> np.ndarray:
     return img
 
 
-def home_screen(width: int = 144, height: int = 304, seed: int = 3) -> np.ndarray:
+def home_screen(width: int = 96, height: int = 200, seed: int = 3) -> np.ndarray:
     """A phone's lit home screen: a soft gradient wallpaper, a status bar, a 4x5 grid of app icons
     (rounded squares in assorted colours) and a dock of four."""
     rng = np.random.default_rng(seed)

@@ -124,11 +124,13 @@ def _door_panels(s, plastic, trim, coll, pid):
 def _seat(name, seat, coll, pid):
     """Cushion, base, tilted backrest and headrest(s): the boxes of ``cabin_geometry.seat_boxes``."""
     fabric = materials.seat_cover("seat_fabric", FABRIC)
+    plain = materials.seat_cover("headrest_fabric", FABRIC, quilted=False)
     plastic = M.material("plastic", PLASTIC)
     parts = []
     for box in seat_boxes(name, seat):
-        parts.append(M.box(box.name, box.centre, box.size, plastic if box.name.endswith("_base") else fabric,
-                           coll, pid, rotation=(0, pitch(box), 0), rounded=box.rounded))
+        mat = plastic if box.name.endswith("_base") else plain if "_headrest" in box.name else fabric
+        parts.append(M.box(box.name, box.centre, box.size, mat, coll, pid, rotation=(0, pitch(box), 0),
+                           rounded=box.rounded))
     return parts
 
 

@@ -131,7 +131,7 @@ def build_phone(coll, instance: str) -> Group:
     g.add(M.box("phone_body", (0, 0, 0), (0.074, 0.152, 0.0085), case, coll, pid, rounded=0.15))
     g.add(M.box("phone_front", (0, 0, 0.0043), (0.071, 0.149, 0.0008), glass, coll, pid, rounded=0.06))
     screen = M.image_material("phone_home_screen", art.home_screen(), "plane", roughness=0.05,
-                              emission_strength=1.6, specular=0.9)
+                              emission_strength=1.6, specular=0.6)
     g.add(M.box("phone_screen", (0, 0, 0.0048), (0.066, 0.143, 0.0002), screen, coll, pid))
     g.add(M.box("phone_camera_bump", (-0.017, 0.051, -0.0050), (0.030, 0.036, 0.0018), glass, coll, pid,
                 rounded=0.25))
@@ -200,7 +200,7 @@ def build_can(coll, instance: str) -> Group:
     g = Group(instance, coll)
     pid = INSTANCE_ID[instance]
     silver = M.material("can_metal", (0.62, 0.62, 0.64), roughness=0.18, metallic=1.0)
-    label = M.image_material("can_label", art.cola_label(), "cylinder", roughness=0.22, metallic=0.55)
+    label = M.image_material("can_label", art.cola_label(), "cylinder", roughness=0.28, metallic=0.45)
     g.add(M.new_object("can_body", M.lathe("cola_can", _CAN, 40), silver, coll, pid))
     sleeve = g.add(M.new_object("can_label", M.unit_cylinder(40, cap=False), label, coll, pid))
     sleeve.location, sleeve.scale = (0, 0, 0.010), (0.0332, 0.0332, 0.094)
