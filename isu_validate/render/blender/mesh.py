@@ -37,6 +37,79 @@ def material(name: str, colour, roughness: float = 0.6, metallic: float = 0.0, e
     return mat
 
 
+def image_material(name: str, rgba, mapping: str, roughness: float = 0.4, metallic: float = 0.0,
+                   emission_strength: float = 0.0, specular: float = 0.5) -> bpy.types.Material:
+    """A material showing an image drawn in code (``render/product_art.py``: float RGBA rows, top first),
+    mapped from the object's own coordinates: ``"cylinder"`` wraps it once round a unit cylinder's axis
+    (u round it, v up its height 0..1), ``"plane"`` lays it on the xy square -0.5..0.5 (a box's face),
+    ``"facing_back"`` on the yz square of a unit box seen from -x (a display facing the cabin).
+    With ``emission_strength`` the image glows (a screen); like the other small glowing parts it is
+    seen, never sampled as a light."""
+    mat = bpy.data.materials.get(name)
+    if mat is not None and mat.get("_isu_built"):
+        return mat
+    mat = mat or bpy.data.materials.new(name)
+    mat.use_nodes = True
+    nodes, links = mat.node_tree.nodes, mat.node_tree.links
+    bsdf = nodes["Principled BSDF"]
+    bsdf.distribution = "GGX"
+    bsdf.inputs["Roughness"].default_value = roughness
+    bsdf.inputs["Metallic"].default_value = metallic
+    bsdf.inputs["Specular IOR Level"].default_value = specular
+    tex = nodes.new("ShaderNodeTexImage")
+    tex.image = _image(name, rgba)
+    tex.extension = "REPEAT" if mapping == "cylinder" else "EXTEND"
+    links.new(_uv(nodes, links, mapping), tex.inputs["Vector"])
+    links.new(tex.outputs["Color"], bsdf.inputs["Base Color"])
+    if emission_strength:
+        links.new(tex.outputs["Color"], bsdf.inputs["Emission Color"])
+        bsdf.inputs["Emission Strength"].default_value = emission_strength
+        mat.cycles.emission_sampling = "NONE"
+    mat["_isu_built"] = True
+    return mat
+
+
+def _image(name: str, rgba) -> bpy.types.Image:
+    import numpy as np
+    rgba = np.asarray(rgba, np.float32)
+    h, w = rgba.shape[:2]
+    image = bpy.data.images.new(name, w, h, alpha=True, float_buffer=False)
+    image.colorspace_settings.name = "sRGB"
+    image.pixels.foreach_set(np.ascontiguousarray(rgba[::-1]).ravel())   # Blender's rows start at the bottom
+    image.pack()
+    return image
+
+
+def _uv(nodes, links, mapping: str):
+    coords = nodes.new("ShaderNodeTexCoord")
+    xyz = nodes.new("ShaderNodeSeparateXYZ")
+    links.new(coords.outputs["Object"], xyz.inputs["Vector"])
+    combine = nodes.new("ShaderNodeCombineXYZ")
+    if mapping == "cylinder":
+        angle = nodes.new("ShaderNodeMath")
+        angle.operation = "ARCTAN2"
+        links.new(xyz.outputs["Y"], angle.inputs[0])
+        links.new(xyz.outputs["X"], angle.inputs[1])
+        u = nodes.new("ShaderNodeMath")
+        u.operation = "MULTIPLY_ADD"          # angle / 2 pi + 0.5
+        links.new(angle.outputs[0], u.inputs[0])
+        u.inputs[1].default_value = 1.0 / (2 * math.pi)
+        u.inputs[2].default_value = 0.5
+        links.new(u.outputs[0], combine.inputs["X"])
+        links.new(xyz.outputs["Z"], combine.inputs["Y"])
+    else:
+        # (source axis, sign) of u and v: seen from -x, the box's +y is on the viewer's left
+        axes = {"plane": (("X", 1.0), ("Y", 1.0)), "facing_back": (("Y", -1.0), ("Z", 1.0))}[mapping]
+        for target, (axis, sign) in zip(("X", "Y"), axes):
+            shift = nodes.new("ShaderNodeMath")
+            shift.operation = "MULTIPLY_ADD"
+            links.new(xyz.outputs[axis], shift.inputs[0])
+            shift.inputs[1].default_value = sign
+            shift.inputs[2].default_value = 0.5
+            links.new(shift.outputs[0], combine.inputs[target])
+    return combine.outputs["Vector"]
+
+
 def set_colour(mat: bpy.types.Material, colour) -> None:
     mat.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = (*colour, 1.0)
 
@@ -113,6 +186,23 @@ def unit_torus(major: float = 1.0, minor: float = 0.1, segments: int = 40) -> bp
                 bm.faces.new((verts[a], verts[b], verts[c], verts[d]))
         _smooth(bm)
     return _cached(f"u_torus_{minor:.3f}", build)
+
+
+def lathe(name: str, profile, segments: int = 32) -> bpy.types.Mesh:
+    """A surface of revolution round z through (radius, z) points from the base up, closed at both ends
+    (a bottle, a can); smooth-shaded, built once per name."""
+    def build(bm):
+        rings = []
+        for r, z in profile:
+            rings.append([bm.verts.new((r * math.cos(2 * math.pi * k / segments),
+                                        r * math.sin(2 * math.pi * k / segments), z)) for k in range(segments)])
+        for a, b in zip(rings, rings[1:]):
+            for k in range(segments):
+                bm.faces.new((a[k], a[(k + 1) % segments], b[(k + 1) % segments], b[k]))
+        bm.faces.new(rings[0][::-1])
+        bm.faces.new(rings[-1])
+        _smooth(bm)
+    return _cached(f"lathe_{name}", build)
 
 
 # ---------------------------------------------------------------------- objects

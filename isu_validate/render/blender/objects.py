@@ -7,10 +7,13 @@ from __future__ import annotations
 import math
 
 import bpy
+import numpy as np
 from mathutils import Vector
 
 from ..cabin_geometry import CHILD_SEAT_PADS, child_seat_boxes, pitch
 from ..labels import INSTANCE_ID
+from .. import product_art as art
+from . import materials
 from . import mesh as M
 from .cabin import euler_deg
 
@@ -46,14 +49,42 @@ def build_child_seat(coll, front_facing: bool) -> Group:
     g = Group("child_seat_" + ("front" if front_facing else "rear"), coll)
     pid = INSTANCE_ID["child_seat"]
     shell = M.material("child_seat_shell", (0.03, 0.03, 0.035), roughness=0.6)
-    pad = M.material("child_seat_pad", (0.30, 0.02, 0.02), roughness=0.9)
-    for box in child_seat_boxes(front_facing):
+    pad = materials.woven("child_seat_pad", (0.30, 0.02, 0.02))
+    boxes = child_seat_boxes(front_facing)
+    for box in boxes:
         g.add(M.box(box.name, box.centre, box.size, pad if box.name in CHILD_SEAT_PADS else shell, coll, pid,
                     rounded=box.rounded, rotation=(0, pitch(box), 0)))
+    _harness(g, {b.name: b for b in boxes}, front_facing, pid)
     if not front_facing:
         handle = g.add(M.new_object("cs_handle", M.unit_torus(1.0, 0.09), shell, coll, pid))
         handle.location, handle.rotation_euler, handle.scale = (0.0, 0, 0.30), (math.pi / 2, 0, 0), (0.2, 0.2, 0.2)
     return g
+
+
+# the five-point harness on the pads: (pad, offset from the pad's centre along its own axes, size)
+_STRAPS = {True: [("cs_backpad", (0.017, y, 0.03), (0.004, 0.035, 0.40)) for y in (0.06, -0.06)]
+                 + [("cs_cushion", (0.0, 0.0, 0.032), (0.14, 0.035, 0.004))],
+           False: [("cs_platepad", (-0.04, y, 0.017), (0.34, 0.035, 0.004)) for y in (0.06, -0.06)]
+                  + [("cs_platepad", (0.20, 0.0, 0.017), (0.10, 0.035, 0.004))]}
+_BUCKLE = {True: ("cs_cushion", (0.05, 0.0, 0.038)), False: ("cs_platepad", (0.14, 0.0, 0.024))}
+
+
+def _harness(g: Group, boxes: dict, front_facing: bool, pid: int) -> None:
+    """Shoulder and crotch straps lying on the pads and the buckle with its red release button."""
+    strap = materials.woven("child_seat_strap", (0.018, 0.018, 0.02), roughness=0.7)
+    buckle = M.material("child_seat_buckle", (0.02, 0.02, 0.022), roughness=0.35)
+    button = M.material("child_seat_button", (0.55, 0.02, 0.02), roughness=0.4)
+
+    def on(pad: str, offset, size, mat, name):
+        box = boxes[pad]
+        centre = np.asarray(box.centre) + box.R @ np.asarray(offset)
+        g.add(M.box(name, tuple(centre), size, mat, g.coll, pid, rounded=0.2, rotation=(0, pitch(box), 0)))
+
+    for k, (pad, offset, size) in enumerate(_STRAPS[front_facing]):
+        on(pad, offset, size, strap, f"cs_strap{k}")
+    pad, offset = _BUCKLE[front_facing]
+    on(pad, offset, (0.035, 0.045, 0.014), buckle, "cs_buckle")
+    on(pad, (offset[0] + 0.004, 0.0, offset[2] + 0.008), (0.016, 0.022, 0.004), button, "cs_buckle_button")
 
 
 def build_luggage(coll) -> tuple[Group, bpy.types.Material]:
@@ -65,64 +96,123 @@ def build_luggage(coll) -> tuple[Group, bpy.types.Material]:
     g.add(M.box("lug_body", (0, 0, 0.295), (0.23, 0.40, 0.55), body_mat, coll, pid, rounded=0.12))
     for k, y in enumerate((-0.12, -0.04, 0.04, 0.12)):  # moulded ribs
         g.add(M.box(f"lug_rib{k}", (0.117, y, 0.295), (0.006, 0.018, 0.48), body_mat, coll, pid, rounded=0.3))
-    g.add(M.box("lug_seam", (0, 0, 0.295), (0.236, 0.406, 0.012), dark, coll, pid))
-    g.add(M.box("lug_handle", (0, 0, 0.585), (0.04, 0.14, 0.025), dark, coll, pid, rounded=0.3))
+    # the zip runs round the sides and top between the front and back shells, its pull hanging at one side
+    g.add(M.box("lug_seam", (0, 0, 0.295), (0.012, 0.406, 0.556), dark, coll, pid, rounded=0.12))
+    zip_metal = M.material("luggage_zip", (0.55, 0.55, 0.57), roughness=0.3, metallic=1.0)
+    g.add(M.box("lug_zip", (0, 0, 0.295), (0.003, 0.4075, 0.5575), zip_metal, coll, pid, rounded=0.12))
+    g.add(M.box("lug_zip_pull", (0.0, 0.205, 0.42), (0.010, 0.004, 0.03), zip_metal, coll, pid, rounded=0.3))
+    g.add(M.box("lug_handle", (0.03, 0, 0.585), (0.04, 0.14, 0.025), dark, coll, pid, rounded=0.3))
+    # the telescopic trolley handle, pushed down: two aluminium tubes and the grip, at the back
+    alu = M.material("luggage_alu", (0.45, 0.46, 0.48), roughness=0.35, metallic=1.0)
+    for k, y in enumerate((0.10, -0.10)):
+        tube = g.add(M.new_object(f"lug_tube{k}", M.unit_cylinder(12), alu, coll, pid))
+        M.place_segment(tube, Vector((-0.085, y, 0.56)), Vector((-0.085, y, 0.60)), 0.008)
+    g.add(M.box("lug_grip", (-0.085, 0, 0.605), (0.03, 0.23, 0.022), dark, coll, pid, rounded=0.4))
+    # four spinner wheels, each in its housing under a corner
     for k, (x, y) in enumerate(((0.08, 0.16), (0.08, -0.16), (-0.08, 0.16), (-0.08, -0.16))):
-        g.add(M.cylinder(f"lug_wheel{k}", (x, y, 0.0), 0.022, 0.025, dark, coll, pid, 10))
+        g.add(M.box(f"lug_wheel_housing{k}", (x, y, 0.035), (0.05, 0.045, 0.03), dark, coll, pid, rounded=0.3))
+        wheel = g.add(M.new_object(f"lug_wheel{k}", M.unit_cylinder(16), dark, coll, pid))
+        M.place_segment(wheel, Vector((x, y - 0.011, 0.022)), Vector((x, y + 0.011, 0.022)), 0.022)
     return g, body_mat
 
 
-def build_phone(coll, instance: str, screen_on: bool = True) -> Group:
-    """A 150 x 72 x 8 mm phone centred on its origin, long axis along local y, screen on local +z: lit
-    while in use (in the hand), dark glass when it lies unused (on the co-driver seat)."""
+def build_phone(coll, instance: str) -> Group:
+    """A 152 x 74 x 8.5 mm smartphone centred on its origin, long axis along local y, screen on local +z:
+    a graphite case round it, black glass in front with a thin bezel round the lit home screen (the same
+    model in the hand and on the co-driver seat), and a camera bump with three lenses and a flash on its
+    back."""
     g = Group(instance, coll)
     pid = INSTANCE_ID[instance]
-    case = M.material("phone_case", (0.01, 0.01, 0.012), roughness=0.3)
-    if screen_on:
-        screen = M.material("phone_screen", (0.02, 0.03, 0.05), roughness=0.1,
-                            emission=(0.35, 0.55, 1.0), emission_strength=1.6)
-    else:
-        screen = M.material("phone_screen_off", (0.008, 0.009, 0.011), roughness=0.05, specular=0.9)
-    g.add(M.box("phone_body", (0, 0, 0), (0.074, 0.152, 0.009), case, coll, pid, rounded=0.15))
-    g.add(M.box("phone_screen", (0, 0, 0.0047), (0.066, 0.140, 0.001), screen, coll, pid))
+    case = M.material("phone_case", (0.012, 0.013, 0.016), roughness=0.3, specular=0.7)   # graphite
+    glass = M.material("phone_glass", (0.004, 0.004, 0.005), roughness=0.03, specular=1.0)
+    lens = M.material("phone_lens", (0.002, 0.002, 0.003), roughness=0.02, specular=1.0)
+    ring = M.material("phone_lens_ring", (0.5, 0.5, 0.52), roughness=0.25, metallic=1.0)
+    flash = M.material("phone_flash", (0.8, 0.75, 0.6), roughness=0.3)
+    g.add(M.box("phone_body", (0, 0, 0), (0.074, 0.152, 0.0085), case, coll, pid, rounded=0.15))
+    g.add(M.box("phone_front", (0, 0, 0.0043), (0.071, 0.149, 0.0008), glass, coll, pid, rounded=0.06))
+    screen = M.image_material("phone_home_screen", art.home_screen(), "plane", roughness=0.05,
+                              emission_strength=1.6, specular=0.6)
+    g.add(M.box("phone_screen", (0, 0, 0.0048), (0.066, 0.143, 0.0002), screen, coll, pid))
+    g.add(M.box("phone_camera_bump", (-0.017, 0.051, -0.0050), (0.030, 0.036, 0.0018), glass, coll, pid,
+                rounded=0.25))
+    lenses = ((-0.024, 0.061), (-0.024, 0.043), (-0.010, 0.052))          # three cameras in a triangle
+    for k, (x, y) in enumerate(lenses):
+        g.add(M.cylinder(f"phone_lens_ring{k}", (x, y, -0.0066), 0.0052, 0.0008, ring, coll, pid, 16))
+        g.add(M.cylinder(f"phone_lens{k}", (x, y, -0.0070), 0.0040, 0.0011, lens, coll, pid, 16))
+    g.add(M.cylinder("phone_flash", (-0.008, 0.063, -0.0062), 0.0016, 0.0004, flash, coll, pid, 10))
+    for obj in g.parts[-(2 * len(lenses) + 1):]:
+        obj.rotation_euler = (math.pi, 0, 0)      # the lenses face out of the back (-z)
+        obj.location.z = -0.0059                  # on the bump's back face
     return g
+
+
+# a 1 l PET bottle, radius against height from the base (m): petaloid foot, body, waist, shoulder, neck
+_BOTTLE = [(0.0, 0.0), (0.030, 0.001), (0.040, 0.006), (0.044, 0.018), (0.044, 0.095), (0.041, 0.100),
+           (0.041, 0.104), (0.044, 0.110), (0.044, 0.185), (0.040, 0.205), (0.030, 0.228), (0.020, 0.243),
+           (0.0135, 0.252), (0.0135, 0.258), (0.0175, 0.259), (0.0175, 0.262), (0.0135, 0.263),
+           (0.0135, 0.268), (0.0, 0.268)]
+_FILL = 0.246    # the cola's level in a full bottle (m above the base): just into the neck, as bottled
+
+
+def _split_profile(profile, z: float):
+    """(the profile below height z, the profile above it), both closed on the axis at z."""
+    for (r0, z0), (r1, z1) in zip(profile, profile[1:]):
+        if z0 <= z < z1:
+            edge = (r0 + (r1 - r0) * (z - z0) / (z1 - z0), z)
+            return ([p for p in profile if p[1] < z] + [edge, (0.0, z)],
+                    [(0.0, z), edge] + [p for p in profile if p[1] > z])
+    raise ValueError(f"height {z} is outside the profile")
 
 
 def build_cola_bottle(coll, instance: str) -> Group:
-    """A 1 l cola bottle (dark liquid, red label), 0.29 m long from the base (origin) along local +z,
-    0.089 m across the label."""
+    """A 1 l PET cola bottle lying or standing from its base (origin) along local +z, 0.29 m long with
+    its cap: dark cola behind glossy plastic, a printed label round the body, a ridged red cap."""
     g = Group(instance, coll)
     pid = INSTANCE_ID[instance]
-    liquid = M.material("cola", (0.04, 0.012, 0.005), roughness=0.08, specular=0.9)
-    label = M.material("cola_label", (0.6, 0.01, 0.01), roughness=0.5)
-    cap = M.material("cola_cap", (0.6, 0.01, 0.01), roughness=0.4)
-    g.add(M.cylinder("bottle_body", (0, 0, 0), 0.043, 0.19, liquid, coll, pid))
-    g.add(M.cylinder("bottle_label", (0, 0, 0.09), 0.0445, 0.07, label, coll, pid))
-    g.add(M.ellipsoid("bottle_shoulder", (0, 0, 0.19), (0.043, 0.043, 0.07), liquid, coll, pid))
-    g.add(M.cylinder("bottle_neck", (0, 0, 0.22), 0.016, 0.06, liquid, coll, pid))
-    g.add(M.cylinder("bottle_cap", (0, 0, 0.275), 0.018, 0.022, cap, coll, pid))
+    # cola behind PET: glossy, nearly opaque, a dark red-brown where light comes through its edges
+    cola = materials.see_through("cola_in_pet", (0.030, 0.008, 0.003), (0.55, 0.16, 0.05), 0.88, 0.04, 1.0)
+    # the empty neck: clear, only its reflections seen (a black base colour)
+    pet = materials.see_through("pet_clear", (0.01, 0.01, 0.01), (0.93, 0.95, 0.94), 0.2, 0.03, 1.0)
+    label = M.image_material("cola_label", art.cola_label(), "cylinder", roughness=0.35, specular=0.6)
+    cap = M.material("cola_cap", (0.60, 0.015, 0.015), roughness=0.45)
+    # filled into the neck: below, cola seen through the plastic; above, the clear, empty neck
+    full, empty = _split_profile(_BOTTLE, _FILL)
+    g.add(M.new_object("bottle_cola", M.lathe("cola_bottle_full", full, 40), cola, coll, pid))
+    g.add(M.new_object("bottle_neck", M.lathe("cola_bottle_empty", empty, 40), pet, coll, pid))
+    sleeve = g.add(M.new_object("bottle_label", M.unit_cylinder(40, cap=False), label, coll, pid))
+    sleeve.location, sleeve.scale = (0, 0, 0.118), (0.0446, 0.0446, 0.062)
+    g.add(M.cylinder("bottle_cap", (0, 0, 0.266), 0.0158, 0.022, cap, coll, pid, 24))
+    for k in range(12):                    # the cap's grip ridges
+        a = 2 * math.pi * k / 12
+        g.add(M.box(f"bottle_cap_ridge{k}", (0.0158 * math.cos(a), 0.0158 * math.sin(a), 0.277),
+                    (0.0012, 0.0012, 0.018), cap, coll, pid, rotation=(0, 0, a)))
     return g
+
+
+# a 330 ml can: domed base, body, necked top
+_CAN = [(0.0, 0.004), (0.026, 0.0), (0.031, 0.003), (0.033, 0.010), (0.033, 0.104), (0.0295, 0.113),
+        (0.0285, 0.116), (0.0, 0.116)]
 
 
 def build_can(coll, instance: str) -> Group:
-    """A 330 ml cola can, red with silver ends, 0.118 m tall from the base (origin), 0.066 m across."""
+    """A 330 ml cola can from its base (origin) along local +z, 0.116 m tall and 0.066 m across: the
+    printed label on the aluminium body, silver base and top with a rim and a ring-pull tab."""
     g = Group(instance, coll)
     pid = INSTANCE_ID[instance]
-    red = M.material("can_red", (0.55, 0.01, 0.01), roughness=0.25, metallic=0.6)
-    silver = M.material("can_top", (0.6, 0.6, 0.62), roughness=0.2, metallic=1.0)
-    g.add(M.cylinder("can_body", (0, 0, 0.01), 0.033, 0.10, red, coll, pid))
-    g.add(M.cylinder("can_bottom", (0, 0, 0.0), 0.029, 0.01, silver, coll, pid))
-    g.add(M.cylinder("can_top", (0, 0, 0.11), 0.029, 0.008, silver, coll, pid))
+    silver = M.material("can_metal", (0.62, 0.62, 0.64), roughness=0.18, metallic=1.0)
+    label = M.image_material("can_label", art.cola_label(), "cylinder", roughness=0.28, metallic=0.45)
+    g.add(M.new_object("can_body", M.lathe("cola_can", _CAN, 40), silver, coll, pid))
+    sleeve = g.add(M.new_object("can_label", M.unit_cylinder(40, cap=False), label, coll, pid))
+    sleeve.location, sleeve.scale = (0, 0, 0.010), (0.0332, 0.0332, 0.094)
+    rim = g.add(M.new_object("can_rim", M.unit_torus(1.0, 0.06), silver, coll, pid))
+    rim.location, rim.scale = (0, 0, 0.116), (0.0275, 0.0275, 0.0275)
+    g.add(M.box("can_tab", (0.008, 0, 0.1166), (0.019, 0.011, 0.0008), silver, coll, pid, rounded=0.4))
     return g
-
-
-def build_phone_lying(coll, instance: str) -> Group:
-    return build_phone(coll, instance, screen_on=False)
 
 
 # ---------------------------------------------------------------------- what a scene asks for
 # the things on the co-driver seat: feature -> (asset part, builder); the feature names the instance too
-ON_CODRIVER_SEAT = {"phone_codriver_seat": ("phone", build_phone_lying),
+ON_CODRIVER_SEAT = {"phone_codriver_seat": ("phone", build_phone),
                     "colacan_codriver_seat": ("colacan", build_can),
                     "colabottle_codriver_seat": ("colabottle", build_cola_bottle)}
 

@@ -1,0 +1,143 @@
+"""Procedural materials of the things in the cabin beyond a plain Principled BSDF (``mesh.material``):
+see-through plastic and liquid, and woven fabric with stitched seams. All node trees, no image files;
+each built once per name. Cheap by design: the presets trace no transmission bounces (refraction would
+render black), so see-through is a Transparent BSDF mixed in, more opaque towards grazing angles as
+real plastic reflects more there."""
+from __future__ import annotations
+
+import bpy
+
+from . import mesh as M
+
+
+def see_through(name: str, colour, tint, opacity: float, roughness: float = 0.05,
+                specular: float = 0.8) -> bpy.types.Material:
+    """A glossy surface of ``colour`` letting ``1 - opacity`` of the light through, tinted ``tint``
+    (PET round a dark liquid, or an empty clear neck)."""
+    mat = M.material(name, colour, roughness=roughness, specular=specular)
+    if mat.get("_isu_see_through"):
+        return mat
+    nodes, links = mat.node_tree.nodes, mat.node_tree.links
+    bsdf, out = nodes["Principled BSDF"], nodes["Material Output"]
+    clear = nodes.new("ShaderNodeBsdfTransparent")
+    clear.inputs["Color"].default_value = (*tint, 1.0)
+    facing = nodes.new("ShaderNodeLayerWeight")
+    facing.inputs["Blend"].default_value = 0.35
+    fac = math_node(nodes, links, "MULTIPLY_ADD", facing.outputs["Facing"], 1.0 - opacity, opacity)
+    mix = nodes.new("ShaderNodeMixShader")
+    links.new(fac, mix.inputs["Fac"])
+    links.new(clear.outputs["BSDF"], mix.inputs[1])
+    links.new(bsdf.outputs["BSDF"], mix.inputs[2])
+    links.new(mix.outputs["Shader"], out.inputs["Surface"])
+    mat["_isu_see_through"] = True
+    return mat
+
+
+def math_node(nodes, links, operation: str, a, b=None, c=None):
+    """A Math node on ``a`` and ``b`` (and ``c``), each a socket or a constant; its output socket."""
+    node = nodes.new("ShaderNodeMath")
+    node.operation = operation
+    for k, value in ((0, a), (1, b), (2, c)):
+        if isinstance(value, bpy.types.NodeSocket):
+            links.new(value, node.inputs[k])
+        elif value is not None:
+            node.inputs[k].default_value = value
+    return node.outputs[0]
+
+
+def seat_cover(name: str, colour, quilted: bool = True) -> bpy.types.Material:
+    """A car seat's woven cover, in each box's own coordinates (-0.5..0.5 across, so it fits every seat
+    part): a mottled tone; unless not ``quilted`` (a headrest), a darker middle insert between two
+    lengthwise stitched seams, quilted by seams across it. Each seam is a soft groove about a centimetre
+    wide (in the bump and a little darker), not a hairline: a line thinner than a pixel flickers at
+    2 samples and the denoiser smears it."""
+    mat = M.material(name, colour, roughness=0.95, specular=0.2)
+    if mat.get("_isu_cover"):
+        return mat
+    mat["_isu_cover"] = True
+    nodes, links = mat.node_tree.nodes, mat.node_tree.links
+    bsdf = nodes["Principled BSDF"]
+    coords = nodes.new("ShaderNodeTexCoord")
+    noise = nodes.new("ShaderNodeTexNoise")
+    noise.inputs["Scale"].default_value = 30.0
+    noise.inputs["Detail"].default_value = 2.0
+    links.new(coords.outputs["Object"], noise.inputs["Vector"])
+    colour_out = _multiply(nodes, links, noise.outputs["Fac"], (*colour, 1.0), (1.25, 1.2, 1.15, 1.0))
+    if not quilted:
+        links.new(colour_out, bsdf.inputs["Base Color"])
+        return mat
+    xyz = nodes.new("ShaderNodeSeparateXYZ")
+    links.new(coords.outputs["Object"], xyz.inputs["Vector"])
+    across = math_node(nodes, links, "ABSOLUTE", xyz.outputs["Y"])
+    insert = math_node(nodes, links, "LESS_THAN", across, 0.27)
+    lengthwise = _groove(nodes, links, math_node(nodes, links, "ABSOLUTE",
+                                                 math_node(nodes, links, "SUBTRACT", across, 0.27)), 0.015)
+    # along the part: x on a cushion's top, z up a backrest (the other is constant on that face)
+    along = math_node(nodes, links, "ADD", xyz.outputs["X"], xyz.outputs["Z"])
+    phase = math_node(nodes, links, "FRACT", math_node(nodes, links, "MULTIPLY", along, 6.0))
+    to_seam = math_node(nodes, links, "SUBTRACT", 0.5,                # 0.5 - |phase - 0.5|, then / 6
+                        math_node(nodes, links, "ABSOLUTE", math_node(nodes, links, "SUBTRACT", phase, 0.5)))
+    quilt = _groove(nodes, links, math_node(nodes, links, "DIVIDE", to_seam, 6.0), 0.012)
+    seam = math_node(nodes, links, "MAXIMUM", lengthwise, math_node(nodes, links, "MULTIPLY", quilt, insert))
+    colour_out = _multiply(nodes, links, insert, colour_out, (0.72, 0.72, 0.72, 1.0))
+    colour_out = _multiply(nodes, links, seam, colour_out, (0.6, 0.6, 0.6, 1.0))
+    links.new(colour_out, bsdf.inputs["Base Color"])
+    bump = nodes.new("ShaderNodeBump")
+    bump.invert = True                                               # a seam is a groove
+    bump.inputs["Strength"].default_value = 0.5
+    links.new(seam, bump.inputs["Height"])
+    links.new(bump.outputs["Normal"], bsdf.inputs["Normal"])
+    return mat
+
+
+def _groove(nodes, links, distance, half_width: float):
+    """1 on a seam, falling linearly to 0 at ``half_width`` from it (in the box's own units)."""
+    node = nodes.new("ShaderNodeMath")
+    node.operation, node.use_clamp = "MULTIPLY_ADD", True             # 1 - distance / half_width
+    links.new(distance, node.inputs[0])
+    node.inputs[1].default_value, node.inputs[2].default_value = -1.0 / half_width, 1.0
+    return node.outputs[0]
+
+
+def _multiply(nodes, links, factor, a, b):
+    """Colour ``a`` multiplied by colour ``b`` as far as ``factor`` (sockets or RGBA constants)."""
+    mix = nodes.new("ShaderNodeMix")
+    mix.data_type, mix.blend_type = "RGBA", "MULTIPLY"
+    links.new(factor, mix.inputs[0])
+    for k, value in ((6, a), (7, b)):
+        if isinstance(value, bpy.types.NodeSocket):
+            links.new(value, mix.inputs[k])
+        else:
+            mix.inputs[k].default_value = value
+    return mix.outputs[2]
+
+
+def woven(name: str, colour, roughness: float = 0.9) -> bpy.types.Material:
+    """Woven fabric (child-seat pads, straps): a mottled tone and lumpy cloth in the bump, both from
+    noise in the object's own coordinates, so they scale with the part."""
+    mat = M.material(name, colour, roughness=roughness, specular=0.2)
+    if mat.get("_isu_woven"):
+        return mat
+    nodes, links = mat.node_tree.nodes, mat.node_tree.links
+    bsdf = nodes["Principled BSDF"]
+    coords = nodes.new("ShaderNodeTexCoord")
+    mottle = nodes.new("ShaderNodeTexNoise")
+    mottle.inputs["Scale"].default_value = 12.0
+    links.new(coords.outputs["Object"], mottle.inputs["Vector"])
+    tone = nodes.new("ShaderNodeMix")
+    tone.data_type, tone.blend_type = "RGBA", "MULTIPLY"
+    links.new(mottle.outputs["Fac"], tone.inputs[0])
+    tone.inputs[6].default_value = (*colour, 1.0)
+    tone.inputs[7].default_value = (1.35, 1.3, 1.3, 1.0)
+    links.new(tone.outputs[2], bsdf.inputs["Base Color"])
+    # the cloth's lumpiness, coarse enough to resolve at 2 samples (a true weave is below a pixel)
+    lumps = nodes.new("ShaderNodeTexNoise")
+    lumps.inputs["Scale"].default_value = 40.0
+    lumps.inputs["Detail"].default_value = 1.0
+    links.new(coords.outputs["Object"], lumps.inputs["Vector"])
+    bump = nodes.new("ShaderNodeBump")
+    bump.inputs["Strength"].default_value = 0.15
+    links.new(lumps.outputs["Fac"], bump.inputs["Height"])
+    links.new(bump.outputs["Normal"], bsdf.inputs["Normal"])
+    mat["_isu_woven"] = True
+    return mat
