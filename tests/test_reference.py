@@ -205,6 +205,14 @@ def test_reference_train_leaves_the_shipped_model_alone_unless_it_is_named(tmp_p
     assert main(["reference", "train", "--n", "10", "--held-out", "1", "--workdir", str(tmp_path / "w")]) == 0
     assert written[-1].resolve() != shipped and written[-1] == tmp_path / "w" / "model"
     assert f"--sut-option model_dir={tmp_path / 'w' / 'model'}" in capsys.readouterr().out
-    assert main(["reference", "train", "--n", "10", "--held-out", "1", "--workdir", str(tmp_path / "w"),
-                 "--out", str(shipped)]) == 0
+    marker = shipped / ".isu-validate.json"    # the command marks its --out: keep the shipped folder as it was
+    kept = marker.read_bytes() if marker.exists() else None
+    try:
+        assert main(["reference", "train", "--n", "10", "--held-out", "1", "--workdir", str(tmp_path / "w"),
+                     "--out", str(shipped)]) == 0
+    finally:
+        if kept is None:
+            marker.unlink(missing_ok=True)
+        else:
+            marker.write_bytes(kept)
     assert written[-1].resolve() == shipped  # named: replaced on purpose (re-pin afterwards)
