@@ -36,7 +36,8 @@ class Preset:
 PRESETS = {
     "draft": Preset("draft", 0.5, 1, True, "FAST", 2, 1, 1, 3.0, 1.5),
     # 3 samples since isu-blender-6: the auto-exposing camera gains night frames up to 16x, and at 2 samples
-    # those fell to SSIM 0.972 and the mean of lit and night frames under 0.97 (3 samples: 0.9724, +35 % CPU)
+    # those fell to SSIM 0.972 and the mean of lit and night frames to 0.967 (3 samples: 0.9706, 1.42x the
+    # seconds of isu-blender-5's standard; render/README.md)
     "standard": Preset("standard", 1.0, 3, True, "FAST", 2, 1, 1, 5.0, 1.5),
     "final": Preset("final", 1.0, 16, True, "ACCURATE", 4, 3, 2, 10.0, 1.5),
     # calibration targets (render_board): no denoiser, whose edge artefacts move ChArUco corners by
