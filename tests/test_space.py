@@ -184,7 +184,8 @@ def test_a_space_extends_another_adding_features_and_keeping_its_constraints(tmp
     diverse = load_space("isu-diverse")
     assert diverse.names[:len(SPACE.names)] == SPACE.names
     assert set(diverse.names) - set(SPACE.names) == {"driver_skin_tone", "driver_hair_colour", "driver_hair_style"}
-    assert not any(diverse.features[n].predicted for n in ("driver_skin_tone", "driver_hair_colour", "driver_hair_style"))
+    looks = ("driver_skin_tone", "driver_hair_colour", "driver_hair_style")
+    assert not any(diverse.features[n].predicted for n in looks)
     assert len(diverse.constraints) == len(SPACE.constraints)
     assert {f.name: f.weight for f in diverse.predicted} == {f.name: f.weight for f in SPACE.predicted}
     again = write(tmp_path, """
@@ -195,8 +196,9 @@ def test_a_space_extends_another_adding_features_and_keeping_its_constraints(tmp
         """)
     with pytest.raises(SpaceError, match="redefines driver_gender"):
         load_space(again)
-    (tmp_path / "a.toml").write_text(f'extends = "{tmp_path / "b.toml"}"\n[features.x]\ntype = "categorical"\nvalues = ["A"]\n')
-    (tmp_path / "b.toml").write_text(f'extends = "{tmp_path / "a.toml"}"\n[features.y]\ntype = "categorical"\nvalues = ["A"]\n')
+    feature = '[features.{}]\ntype = "categorical"\nvalues = ["A"]\n'
+    (tmp_path / "a.toml").write_text(f'extends = "{tmp_path / "b.toml"}"\n' + feature.format("x"))
+    (tmp_path / "b.toml").write_text(f'extends = "{tmp_path / "a.toml"}"\n' + feature.format("y"))
     with pytest.raises(SpaceError, match="extends it back"):
         load_space(tmp_path / "a.toml")
     with pytest.raises(SpaceError, match="extends 'no-such-space'"):
