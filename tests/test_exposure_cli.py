@@ -2,13 +2,14 @@
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import cv2
 import numpy as np
 import pytest
 
-from capture.camera import load_camera, write_imaging
+from capture.camera import load_camera, write_imaging, write_toml
 from capture.camera_model import synthetic
 from isu_validate.cli import main
 from isu_validate.exr import write_exr
@@ -58,7 +59,7 @@ def test_apply_on_a_run_develops_every_render_and_resumes(camera, tmp_path, caps
 def test_apply_names_what_is_missing(tmp_path, capsys):
     (tmp_path / "run" / "images").mkdir(parents=True)
     plain = tmp_path / "plain.toml"        # the default rig without its auto-exposure table
-    plain.write_text(Path(load_camera("default").source).read_text().split("\n[exposure]")[0])
+    write_toml(replace(load_camera("default"), imaging=None), plain)
     assert main(["exposure", "apply", str(tmp_path / "run"), "--camera", str(plain)]) == 2
     assert "no imaging model" in capsys.readouterr().err
     camera = write_imaging(load_camera("default").source, synthetic.camera(), tmp_path / "c.toml")

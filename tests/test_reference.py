@@ -186,8 +186,9 @@ def test_reference_train_leaves_the_shipped_model_alone_unless_it_is_named(tmp_p
     """The command with its defaults, the rendering and training replaced by recorders."""
     from isu_validate import render
     from isu_validate.cli import main
-    from isu_validate.reference import training
-    from isu_validate.reference.model import default_model_dir
+    import shutil
+
+    from isu_validate.reference import model as reference_model, training
 
     written = []
 
@@ -201,18 +202,12 @@ def test_reference_train_leaves_the_shipped_model_alone_unless_it_is_named(tmp_p
 
     monkeypatch.setattr(render, "open_renderer", lambda **kw: NoRenderer())
     monkeypatch.setattr(training, "train_reference", record)
-    shipped = default_model_dir().resolve()
+    # a copy stands for the shipped model: the command marks the folder it writes, the checkout stays as it is
+    shipped = shutil.copytree(reference_model.default_model_dir(), tmp_path / "shipped").resolve()
+    monkeypatch.setattr(reference_model, "default_model_dir", lambda: shipped)
     assert main(["reference", "train", "--n", "10", "--held-out", "1", "--workdir", str(tmp_path / "w")]) == 0
     assert written[-1].resolve() != shipped and written[-1] == tmp_path / "w" / "model"
     assert f"--sut-option model_dir={tmp_path / 'w' / 'model'}" in capsys.readouterr().out
-    marker = shipped / ".isu-validate.json"    # the command marks its --out: keep the shipped folder as it was
-    kept = marker.read_bytes() if marker.exists() else None
-    try:
-        assert main(["reference", "train", "--n", "10", "--held-out", "1", "--workdir", str(tmp_path / "w"),
-                     "--out", str(shipped)]) == 0
-    finally:
-        if kept is None:
-            marker.unlink(missing_ok=True)
-        else:
-            marker.write_bytes(kept)
+    assert main(["reference", "train", "--n", "10", "--held-out", "1", "--workdir", str(tmp_path / "w"),
+                 "--out", str(shipped)]) == 0
     assert written[-1].resolve() == shipped  # named: replaced on purpose (re-pin afterwards)

@@ -77,9 +77,9 @@ def _pillar(name, p0, p1, mat, coll, pid):
 
 def _dashboard(s, plastic, trim, coll, pid):
     xf, hw, top = s["x_front"], s["half_width"], s["dashboard_top"]
-    display = M.image_material("centre_display", art.navigation_screen(), "facing_back", roughness=0.08,
+    display = M.image_material("centre_display", art.navigation_screen, "facing_back", roughness=0.08,
                                emission_strength=0.3, specular=0.8)   # night-dimmed: it must not light the cabin
-    dial = M.image_material("instrument_dial", art.instrument_dial(), "facing_back", roughness=0.1,
+    dial = M.image_material("instrument_dial", art.instrument_dial, "facing_back", roughness=0.1,
                             emission_strength=0.25, specular=0.8)
     tilt = math.radians(-15)
     gauges = [M.box(f"gauge_{k}", (xf - 0.441, 0.37 + dy, top + 0.01), (0.002, 0.07, 0.07), dial, coll, pid)

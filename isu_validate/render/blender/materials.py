@@ -8,6 +8,7 @@ from __future__ import annotations
 import bpy
 
 from . import mesh as M
+from . import nodes as N
 
 
 def see_through(name: str, colour, tint, opacity: float, roughness: float = 0.05,
@@ -23,7 +24,7 @@ def see_through(name: str, colour, tint, opacity: float, roughness: float = 0.05
     clear.inputs["Color"].default_value = (*tint, 1.0)
     facing = nodes.new("ShaderNodeLayerWeight")
     facing.inputs["Blend"].default_value = 0.35
-    fac = math_node(nodes, links, "MULTIPLY_ADD", facing.outputs["Facing"], 1.0 - opacity, opacity)
+    fac = N.math(nodes, links, "MULTIPLY_ADD", facing.outputs["Facing"], 1.0 - opacity, opacity)
     mix = nodes.new("ShaderNodeMixShader")
     links.new(fac, mix.inputs["Fac"])
     links.new(clear.outputs["BSDF"], mix.inputs[1])
@@ -33,16 +34,6 @@ def see_through(name: str, colour, tint, opacity: float, roughness: float = 0.05
     return mat
 
 
-def math_node(nodes, links, operation: str, a, b=None, c=None):
-    """A Math node on ``a`` and ``b`` (and ``c``), each a socket or a constant; its output socket."""
-    node = nodes.new("ShaderNodeMath")
-    node.operation = operation
-    for k, value in ((0, a), (1, b), (2, c)):
-        if isinstance(value, bpy.types.NodeSocket):
-            links.new(value, node.inputs[k])
-        elif value is not None:
-            node.inputs[k].default_value = value
-    return node.outputs[0]
 
 
 def seat_cover(name: str, colour, quilted: bool = True) -> bpy.types.Material:
@@ -57,30 +48,25 @@ def seat_cover(name: str, colour, quilted: bool = True) -> bpy.types.Material:
     mat["_isu_cover"] = True
     nodes, links = mat.node_tree.nodes, mat.node_tree.links
     bsdf = nodes["Principled BSDF"]
-    coords = nodes.new("ShaderNodeTexCoord")
-    noise = nodes.new("ShaderNodeTexNoise")
-    noise.inputs["Scale"].default_value = 30.0
-    noise.inputs["Detail"].default_value = 2.0
-    links.new(coords.outputs["Object"], noise.inputs["Vector"])
-    colour_out = _multiply(nodes, links, noise.outputs["Fac"], (*colour, 1.0), (1.25, 1.2, 1.15, 1.0))
+    colour_out = N.multiply(nodes, links, N.noise(nodes, links, 30.0, 2.0), colour, (1.25, 1.2, 1.15))
     if not quilted:
         links.new(colour_out, bsdf.inputs["Base Color"])
         return mat
     xyz = nodes.new("ShaderNodeSeparateXYZ")
-    links.new(coords.outputs["Object"], xyz.inputs["Vector"])
-    across = math_node(nodes, links, "ABSOLUTE", xyz.outputs["Y"])
-    insert = math_node(nodes, links, "LESS_THAN", across, 0.27)
-    lengthwise = _groove(nodes, links, math_node(nodes, links, "ABSOLUTE",
-                                                 math_node(nodes, links, "SUBTRACT", across, 0.27)), 0.015)
+    links.new(N.object_coordinates(nodes), xyz.inputs["Vector"])
+    across = N.math(nodes, links, "ABSOLUTE", xyz.outputs["Y"])
+    insert = N.math(nodes, links, "LESS_THAN", across, 0.27)
+    lengthwise = _groove(nodes, links, N.math(nodes, links, "ABSOLUTE",
+                                                 N.math(nodes, links, "SUBTRACT", across, 0.27)), 0.015)
     # along the part: x on a cushion's top, z up a backrest (the other is constant on that face)
-    along = math_node(nodes, links, "ADD", xyz.outputs["X"], xyz.outputs["Z"])
-    phase = math_node(nodes, links, "FRACT", math_node(nodes, links, "MULTIPLY", along, 6.0))
-    to_seam = math_node(nodes, links, "SUBTRACT", 0.5,                # 0.5 - |phase - 0.5|, then / 6
-                        math_node(nodes, links, "ABSOLUTE", math_node(nodes, links, "SUBTRACT", phase, 0.5)))
-    quilt = _groove(nodes, links, math_node(nodes, links, "DIVIDE", to_seam, 6.0), 0.012)
-    seam = math_node(nodes, links, "MAXIMUM", lengthwise, math_node(nodes, links, "MULTIPLY", quilt, insert))
-    colour_out = _multiply(nodes, links, insert, colour_out, (0.72, 0.72, 0.72, 1.0))
-    colour_out = _multiply(nodes, links, seam, colour_out, (0.6, 0.6, 0.6, 1.0))
+    along = N.math(nodes, links, "ADD", xyz.outputs["X"], xyz.outputs["Z"])
+    phase = N.math(nodes, links, "FRACT", N.math(nodes, links, "MULTIPLY", along, 6.0))
+    to_seam = N.math(nodes, links, "SUBTRACT", 0.5,                # 0.5 - |phase - 0.5|, then / 6
+                        N.math(nodes, links, "ABSOLUTE", N.math(nodes, links, "SUBTRACT", phase, 0.5)))
+    quilt = _groove(nodes, links, N.math(nodes, links, "DIVIDE", to_seam, 6.0), 0.012)
+    seam = N.math(nodes, links, "MAXIMUM", lengthwise, N.math(nodes, links, "MULTIPLY", quilt, insert))
+    colour_out = N.multiply(nodes, links, insert, colour_out, (0.72, 0.72, 0.72))
+    colour_out = N.multiply(nodes, links, seam, colour_out, (0.6, 0.6, 0.6))
     links.new(colour_out, bsdf.inputs["Base Color"])
     bump = nodes.new("ShaderNodeBump")
     bump.invert = True                                               # a seam is a groove
@@ -92,24 +78,9 @@ def seat_cover(name: str, colour, quilted: bool = True) -> bpy.types.Material:
 
 def _groove(nodes, links, distance, half_width: float):
     """1 on a seam, falling linearly to 0 at ``half_width`` from it (in the box's own units)."""
-    node = nodes.new("ShaderNodeMath")
-    node.operation, node.use_clamp = "MULTIPLY_ADD", True             # 1 - distance / half_width
-    links.new(distance, node.inputs[0])
-    node.inputs[1].default_value, node.inputs[2].default_value = -1.0 / half_width, 1.0
-    return node.outputs[0]
+    return N.math(nodes, links, "MULTIPLY_ADD", distance, -1.0 / half_width, 1.0, clamp=True)   # 1 - d / w
 
 
-def _multiply(nodes, links, factor, a, b):
-    """Colour ``a`` multiplied by colour ``b`` as far as ``factor`` (sockets or RGBA constants)."""
-    mix = nodes.new("ShaderNodeMix")
-    mix.data_type, mix.blend_type = "RGBA", "MULTIPLY"
-    links.new(factor, mix.inputs[0])
-    for k, value in ((6, a), (7, b)):
-        if isinstance(value, bpy.types.NodeSocket):
-            links.new(value, mix.inputs[k])
-        else:
-            mix.inputs[k].default_value = value
-    return mix.outputs[2]
 
 
 def woven(name: str, colour, roughness: float = 0.9) -> bpy.types.Material:
@@ -120,24 +91,12 @@ def woven(name: str, colour, roughness: float = 0.9) -> bpy.types.Material:
         return mat
     nodes, links = mat.node_tree.nodes, mat.node_tree.links
     bsdf = nodes["Principled BSDF"]
-    coords = nodes.new("ShaderNodeTexCoord")
-    mottle = nodes.new("ShaderNodeTexNoise")
-    mottle.inputs["Scale"].default_value = 12.0
-    links.new(coords.outputs["Object"], mottle.inputs["Vector"])
-    tone = nodes.new("ShaderNodeMix")
-    tone.data_type, tone.blend_type = "RGBA", "MULTIPLY"
-    links.new(mottle.outputs["Fac"], tone.inputs[0])
-    tone.inputs[6].default_value = (*colour, 1.0)
-    tone.inputs[7].default_value = (1.35, 1.3, 1.3, 1.0)
-    links.new(tone.outputs[2], bsdf.inputs["Base Color"])
+    tone = N.multiply(nodes, links, N.noise(nodes, links, 12.0), colour, (1.35, 1.3, 1.3))
+    links.new(tone, bsdf.inputs["Base Color"])
     # the cloth's lumpiness, coarse enough to resolve at 2 samples (a true weave is below a pixel)
-    lumps = nodes.new("ShaderNodeTexNoise")
-    lumps.inputs["Scale"].default_value = 40.0
-    lumps.inputs["Detail"].default_value = 1.0
-    links.new(coords.outputs["Object"], lumps.inputs["Vector"])
     bump = nodes.new("ShaderNodeBump")
     bump.inputs["Strength"].default_value = 0.15
-    links.new(lumps.outputs["Fac"], bump.inputs["Height"])
+    links.new(N.noise(nodes, links, 40.0, 1.0), bump.inputs["Height"])
     links.new(bump.outputs["Normal"], bsdf.inputs["Normal"])
     mat["_isu_woven"] = True
     return mat

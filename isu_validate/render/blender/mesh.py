@@ -10,6 +10,8 @@ import bmesh
 import bpy
 from mathutils import Matrix, Vector
 
+from . import nodes as N
+
 _MESH_CACHE: dict[str, bpy.types.Mesh] = {}
 
 
@@ -37,27 +39,24 @@ def material(name: str, colour, roughness: float = 0.6, metallic: float = 0.0, e
     return mat
 
 
-def image_material(name: str, rgba, mapping: str, roughness: float = 0.4, metallic: float = 0.0,
-                   emission_strength: float = 0.0, specular: float = 0.5) -> bpy.types.Material:
-    """A material showing an image drawn in code (``render/product_art.py``: float RGBA rows, top first),
-    mapped from the object's own coordinates: ``"cylinder"`` wraps it once round a unit cylinder's axis
+def image_material(name: str, draw, mapping: str, roughness: float = 0.4, metallic: float = 0.0,
+                   emission_strength: float = 0.0, specular: float = 0.5, image: str | None = None
+                   ) -> bpy.types.Material:
+    """A material showing an image drawn in code: ``draw()`` returns it (``render/product_art.py``: float
+    RGBA rows, top first) and is called only when the image ``image`` (default: the material's name) is
+    not in the scene yet, so materials showing one picture share it and a built material draws nothing.
+    It is mapped from the object's own coordinates: ``"cylinder"`` wraps it once round a unit cylinder's axis
     (u round it, v up its height 0..1), ``"plane"`` lays it on the xy square -0.5..0.5 (a box's face),
     ``"facing_back"`` on the yz square of a unit box seen from -x (a display facing the cabin).
     With ``emission_strength`` the image glows (a screen); like the other small glowing parts it is
     seen, never sampled as a light."""
-    mat = bpy.data.materials.get(name)
-    if mat is not None and mat.get("_isu_built"):
+    mat = material(name, (1.0, 1.0, 1.0), roughness=roughness, metallic=metallic, specular=specular)
+    if mat.get("_isu_image"):
         return mat
-    mat = mat or bpy.data.materials.new(name)
-    mat.use_nodes = True
     nodes, links = mat.node_tree.nodes, mat.node_tree.links
     bsdf = nodes["Principled BSDF"]
-    bsdf.distribution = "GGX"
-    bsdf.inputs["Roughness"].default_value = roughness
-    bsdf.inputs["Metallic"].default_value = metallic
-    bsdf.inputs["Specular IOR Level"].default_value = specular
     tex = nodes.new("ShaderNodeTexImage")
-    tex.image = _image(name, rgba)
+    tex.image = _image(image or name, draw)
     tex.extension = "REPEAT" if mapping == "cylinder" else "EXTEND"
     links.new(_uv(nodes, links, mapping), tex.inputs["Vector"])
     links.new(tex.outputs["Color"], bsdf.inputs["Base Color"])
@@ -65,48 +64,38 @@ def image_material(name: str, rgba, mapping: str, roughness: float = 0.4, metall
         links.new(tex.outputs["Color"], bsdf.inputs["Emission Color"])
         bsdf.inputs["Emission Strength"].default_value = emission_strength
         mat.cycles.emission_sampling = "NONE"
-    mat["_isu_built"] = True
+    mat["_isu_image"] = True
     return mat
 
 
-def _image(name: str, rgba) -> bpy.types.Image:
+def _image(name: str, draw) -> bpy.types.Image:
+    found = bpy.data.images.get(name)
+    if found is not None and found.get("_isu_drawn"):
+        return found
     import numpy as np
-    rgba = np.asarray(rgba, np.float32)
+    rgba = np.asarray(draw(), np.float32)
     h, w = rgba.shape[:2]
     image = bpy.data.images.new(name, w, h, alpha=True, float_buffer=False)
     image.colorspace_settings.name = "sRGB"
     image.pixels.foreach_set(np.ascontiguousarray(rgba[::-1]).ravel())   # Blender's rows start at the bottom
     image.pack()
+    image["_isu_drawn"] = True
     return image
 
 
 def _uv(nodes, links, mapping: str):
-    coords = nodes.new("ShaderNodeTexCoord")
     xyz = nodes.new("ShaderNodeSeparateXYZ")
-    links.new(coords.outputs["Object"], xyz.inputs["Vector"])
+    links.new(N.object_coordinates(nodes), xyz.inputs["Vector"])
     combine = nodes.new("ShaderNodeCombineXYZ")
-    if mapping == "cylinder":
-        angle = nodes.new("ShaderNodeMath")
-        angle.operation = "ARCTAN2"
-        links.new(xyz.outputs["Y"], angle.inputs[0])
-        links.new(xyz.outputs["X"], angle.inputs[1])
-        u = nodes.new("ShaderNodeMath")
-        u.operation = "MULTIPLY_ADD"          # angle / 2 pi + 0.5
-        links.new(angle.outputs[0], u.inputs[0])
-        u.inputs[1].default_value = 1.0 / (2 * math.pi)
-        u.inputs[2].default_value = 0.5
-        links.new(u.outputs[0], combine.inputs["X"])
+    if mapping == "cylinder":          # u = angle / 2 pi + 0.5 round the axis, v = z
+        angle = N.math(nodes, links, "ARCTAN2", xyz.outputs["Y"], xyz.outputs["X"])
+        links.new(N.math(nodes, links, "MULTIPLY_ADD", angle, 1.0 / (2 * math.pi), 0.5), combine.inputs["X"])
         links.new(xyz.outputs["Z"], combine.inputs["Y"])
     else:
         # (source axis, sign) of u and v: seen from -x, the box's +y is on the viewer's left
         axes = {"plane": (("X", 1.0), ("Y", 1.0)), "facing_back": (("Y", -1.0), ("Z", 1.0))}[mapping]
         for target, (axis, sign) in zip(("X", "Y"), axes):
-            shift = nodes.new("ShaderNodeMath")
-            shift.operation = "MULTIPLY_ADD"
-            links.new(xyz.outputs[axis], shift.inputs[0])
-            shift.inputs[1].default_value = sign
-            shift.inputs[2].default_value = 0.5
-            links.new(shift.outputs[0], combine.inputs[target])
+            links.new(N.math(nodes, links, "MULTIPLY_ADD", xyz.outputs[axis], sign, 0.5), combine.inputs[target])
     return combine.outputs["Vector"]
 
 

@@ -130,19 +130,19 @@ def build_phone(coll, instance: str) -> Group:
     flash = M.material("phone_flash", (0.8, 0.75, 0.6), roughness=0.3)
     g.add(M.box("phone_body", (0, 0, 0), (0.074, 0.152, 0.0085), case, coll, pid, rounded=0.15))
     g.add(M.box("phone_front", (0, 0, 0.0043), (0.071, 0.149, 0.0008), glass, coll, pid, rounded=0.06))
-    screen = M.image_material("phone_home_screen", art.home_screen(), "plane", roughness=0.05,
+    screen = M.image_material("phone_home_screen", art.home_screen, "plane", roughness=0.05,
                               emission_strength=1.6, specular=0.6)
     g.add(M.box("phone_screen", (0, 0, 0.0048), (0.066, 0.143, 0.0002), screen, coll, pid))
     g.add(M.box("phone_camera_bump", (-0.017, 0.051, -0.0050), (0.030, 0.036, 0.0018), glass, coll, pid,
                 rounded=0.25))
     lenses = ((-0.024, 0.061), (-0.024, 0.043), (-0.010, 0.052))          # three cameras in a triangle
+    back = -0.0059                                # the bump's back face, where the lenses stand
     for k, (x, y) in enumerate(lenses):
-        g.add(M.cylinder(f"phone_lens_ring{k}", (x, y, -0.0066), 0.0052, 0.0008, ring, coll, pid, 16))
-        g.add(M.cylinder(f"phone_lens{k}", (x, y, -0.0070), 0.0040, 0.0011, lens, coll, pid, 16))
-    g.add(M.cylinder("phone_flash", (-0.008, 0.063, -0.0062), 0.0016, 0.0004, flash, coll, pid, 10))
+        g.add(M.cylinder(f"phone_lens_ring{k}", (x, y, back), 0.0052, 0.0008, ring, coll, pid, 16))
+        g.add(M.cylinder(f"phone_lens{k}", (x, y, back), 0.0040, 0.0011, lens, coll, pid, 16))
+    g.add(M.cylinder("phone_flash", (-0.008, 0.063, back), 0.0016, 0.0004, flash, coll, pid, 10))
     for obj in g.parts[-(2 * len(lenses) + 1):]:
-        obj.rotation_euler = (math.pi, 0, 0)      # the lenses face out of the back (-z)
-        obj.location.z = -0.0059                  # on the bump's back face
+        obj.rotation_euler = (math.pi, 0, 0)      # turned to face out of the back (-z)
     return g
 
 
@@ -173,7 +173,7 @@ def build_cola_bottle(coll, instance: str) -> Group:
     cola = materials.see_through("cola_in_pet", (0.030, 0.008, 0.003), (0.55, 0.16, 0.05), 0.88, 0.04, 1.0)
     # the empty neck: clear, only its reflections seen (a black base colour)
     pet = materials.see_through("pet_clear", (0.01, 0.01, 0.01), (0.93, 0.95, 0.94), 0.2, 0.03, 1.0)
-    label = M.image_material("cola_label", art.cola_label(), "cylinder", roughness=0.35, specular=0.6)
+    label = M.image_material("cola_label", art.cola_label, "cylinder", roughness=0.35, specular=0.6)
     cap = M.material("cola_cap", (0.60, 0.015, 0.015), roughness=0.45)
     # filled into the neck: below, cola seen through the plastic; above, the clear, empty neck
     full, empty = _split_profile(_BOTTLE, _FILL)
@@ -200,7 +200,8 @@ def build_can(coll, instance: str) -> Group:
     g = Group(instance, coll)
     pid = INSTANCE_ID[instance]
     silver = M.material("can_metal", (0.62, 0.62, 0.64), roughness=0.18, metallic=1.0)
-    label = M.image_material("can_label", art.cola_label(), "cylinder", roughness=0.28, metallic=0.45)
+    label = M.image_material("can_label", art.cola_label, "cylinder", roughness=0.28, metallic=0.45,
+                             image="cola_label")
     g.add(M.new_object("can_body", M.lathe("cola_can", _CAN, 40), silver, coll, pid))
     sleeve = g.add(M.new_object("can_label", M.unit_cylinder(40, cap=False), label, coll, pid))
     sleeve.location, sleeve.scale = (0, 0, 0.010), (0.0332, 0.0332, 0.094)

@@ -12,6 +12,7 @@ from __future__ import annotations
 import bpy
 
 from ...srgb import srgb_to_linear
+from . import nodes as N
 
 
 def _linear(*srgb_8bit):
@@ -72,28 +73,28 @@ def _body_material(name: str, lips_mask: str) -> bpy.types.Material:
     the lips where MPFB's UV lip mask is bright, brows and the painted hairline with soft, uneven edges."""
     mat, nodes, links, bsdf = _new(name)
     bsdf.inputs["Specular IOR Level"].default_value = 0.35
-    skin = _rgb(nodes, "colour_skin", SKIN_TONES["MEDIUM"]).outputs[0]
+    skin = N.rgb(nodes, "colour_skin", SKIN_TONES["MEDIUM"])
     # real skin is not one colour: blotches of a few cm, a little redder and darker
-    blotch = _noise(nodes, links, 22.0, detail=3.0)
-    tint = _mix(nodes, links, blotch, skin, _multiply_rgb(nodes, links, skin, (0.86, 0.80, 0.80)))
-    colour = _mix(nodes, links, _value(nodes, 0.6), skin, tint)
-    rough = _map(nodes, links, _noise(nodes, links, 60.0, detail=2.0), 0.38, 0.55)
+    blotch = N.noise(nodes, links, 22.0, 3.0)
+    tint = N.mix(nodes, links, blotch, skin, N.multiply(nodes, links, 1.0, skin, (0.86, 0.80, 0.80)))
+    colour = N.mix(nodes, links, N.value(nodes, 0.6), skin, tint)
+    rough = N.map_range(nodes, links, N.noise(nodes, links, 60.0, 2.0), 0.38, 0.55)
     for field, rgb, roughness in _GARMENTS:
         inside = _inside(nodes, links, field)
-        colour = _mix(nodes, links, inside, colour, _rgb(nodes, f"colour_{field}", rgb).outputs[0])
-        rough = _mix(nodes, links, inside, rough, _value(nodes, roughness), "FLOAT")
+        colour = N.mix(nodes, links, inside, colour, N.rgb(nodes, f"colour_{field}", rgb))
+        rough = N.mix(nodes, links, inside, rough, N.value(nodes, roughness), "FLOAT")
     lips = _image(nodes, links, lips_mask)
-    colour = _mix(nodes, links, lips, colour, _multiply_rgb(nodes, links, skin, (0.78, 0.48, 0.46)))
-    hair = _rgb(nodes, "colour_hair", HAIR_COLOURS["BROWN"]).outputs[0]
+    colour = N.mix(nodes, links, lips, colour, N.multiply(nodes, links, 1.0, skin, (0.78, 0.48, 0.46)))
+    hair = N.rgb(nodes, "colour_hair", HAIR_COLOURS["BROWN"])
     strands = _strands(nodes, links)
-    hair_shaded = _mix(nodes, links, strands, _multiply_rgb(nodes, links, hair, (0.8, 0.8, 0.8)),
-                       _multiply_rgb(nodes, links, hair, (1.2, 1.2, 1.2)))
+    hair_shaded = N.mix(nodes, links, strands, N.multiply(nodes, links, 1.0, hair, (0.8, 0.8, 0.8)),
+                       N.multiply(nodes, links, 1.0, hair, (1.2, 1.2, 1.2)))
     # brows: dense in the middle, thinning over the last 1.5 mm, broken up by strands; darker than the hair
     brows = _soft(nodes, links, "brows", 0.0015, strands, 0.95)
-    colour = _mix(nodes, links, brows, colour, _multiply_rgb(nodes, links, hair_shaded, (0.7, 0.7, 0.7)))
+    colour = N.mix(nodes, links, brows, colour, N.multiply(nodes, links, 1.0, hair_shaded, (0.7, 0.7, 0.7)))
     scalp = _soft(nodes, links, "scalp", 0.002, strands, 1.0)
-    colour = _mix(nodes, links, scalp, colour, hair_shaded)
-    rough = _mix(nodes, links, scalp, rough, _value(nodes, 0.45), "FLOAT")
+    colour = N.mix(nodes, links, scalp, colour, hair_shaded)
+    rough = N.mix(nodes, links, scalp, rough, N.value(nodes, 0.45), "FLOAT")
     links.new(colour, bsdf.inputs["Base Color"])
     links.new(rough, bsdf.inputs["Roughness"])
     return mat
@@ -106,7 +107,7 @@ def _eye_material(name: str, iris: bool) -> bpy.types.Material:
     mat, nodes, links, bsdf = _new(name)
     bsdf.inputs["Roughness"].default_value = 0.04
     bsdf.inputs["Specular IOR Level"].default_value = 0.9
-    sclera = _rgb(nodes, "colour_sclera", SCLERA).outputs[0]
+    sclera = N.rgb(nodes, "colour_sclera", SCLERA)
     if not iris:
         links.new(sclera, bsdf.inputs["Base Color"])
         return mat
@@ -116,15 +117,15 @@ def _eye_material(name: str, iris: bool) -> bpy.types.Material:
     r.operation = "LENGTH"
     links.new(uv.outputs["UV"], r.inputs[0])
     radius = r.outputs["Value"]
-    iris_rgb = _rgb(nodes, "colour_iris", IRIS["BROWN"]).outputs[0]
-    fibres = _noise(nodes, links, 900.0, detail=2.0)
-    iris_shaded = _mix(nodes, links, fibres, _multiply_rgb(nodes, links, iris_rgb, (0.6, 0.6, 0.6)),
-                       _multiply_rgb(nodes, links, iris_rgb, (1.5, 1.5, 1.5)))
-    rim = _step(nodes, links, radius, _IRIS - 0.07, above=True)
-    iris_shaded = _mix(nodes, links, rim, iris_shaded, _multiply_rgb(nodes, links, iris_rgb, (0.35, 0.35, 0.35)))
-    colour = _mix(nodes, links, _step(nodes, links, radius, _IRIS), sclera, iris_shaded)
-    colour = _mix(nodes, links, _step(nodes, links, radius, _PUPIL), colour,
-                  _rgb(nodes, "pupil", (0.004, 0.004, 0.004)).outputs[0])
+    iris_rgb = N.rgb(nodes, "colour_iris", IRIS["BROWN"])
+    fibres = N.noise(nodes, links, 900.0, 2.0)
+    iris_shaded = N.mix(nodes, links, fibres, N.multiply(nodes, links, 1.0, iris_rgb, (0.6, 0.6, 0.6)),
+                       N.multiply(nodes, links, 1.0, iris_rgb, (1.5, 1.5, 1.5)))
+    rim = N.math(nodes, links, "GREATER_THAN", radius, _IRIS - 0.07)
+    iris_shaded = N.mix(nodes, links, rim, iris_shaded, N.multiply(nodes, links, 1.0, iris_rgb, (0.35, 0.35, 0.35)))
+    colour = N.mix(nodes, links, N.math(nodes, links, "LESS_THAN", radius, _IRIS), sclera, iris_shaded)
+    colour = N.mix(nodes, links, N.math(nodes, links, "LESS_THAN", radius, _PUPIL), colour,
+                  N.rgb(nodes, "pupil", (0.004, 0.004, 0.004)))
     links.new(colour, bsdf.inputs["Base Color"])
     return mat
 
@@ -134,9 +135,9 @@ def _mouth_material(name: str) -> bpy.types.Material:
     mouth's cavity (the host's ``teeth`` field)."""
     mat, nodes, links, bsdf = _new(name)
     teeth = _inside(nodes, links, "teeth")
-    colour = _mix(nodes, links, teeth, _rgb(nodes, "mouth", MOUTH).outputs[0], _rgb(nodes, "teeth", TEETH).outputs[0])
+    colour = N.mix(nodes, links, teeth, N.rgb(nodes, "mouth", MOUTH), N.rgb(nodes, "teeth", TEETH))
     links.new(colour, bsdf.inputs["Base Color"])
-    links.new(_mix(nodes, links, teeth, _value(nodes, 0.6), _value(nodes, 0.25), "FLOAT"), bsdf.inputs["Roughness"])
+    links.new(N.mix(nodes, links, teeth, N.value(nodes, 0.6), N.value(nodes, 0.25), "FLOAT"), bsdf.inputs["Roughness"])
     return mat
 
 
@@ -145,10 +146,10 @@ def _hair_material(name: str) -> bpy.types.Material:
     mat, nodes, links, bsdf = _new(name)
     bsdf.inputs["Roughness"].default_value = 0.6     # many strands scatter light: no plastic highlight
     bsdf.inputs["Specular IOR Level"].default_value = 0.25
-    hair = _rgb(nodes, "colour_hair", HAIR_COLOURS["BROWN"]).outputs[0]
+    hair = N.rgb(nodes, "colour_hair", HAIR_COLOURS["BROWN"])
     strands = _strands(nodes, links)
-    colour = _mix(nodes, links, strands, _multiply_rgb(nodes, links, hair, (0.75, 0.75, 0.75)),
-                  _multiply_rgb(nodes, links, hair, (1.25, 1.22, 1.2)))
+    colour = N.mix(nodes, links, strands, N.multiply(nodes, links, 1.0, hair, (0.75, 0.75, 0.75)),
+                  N.multiply(nodes, links, 1.0, hair, (1.25, 1.22, 1.2)))
     links.new(colour, bsdf.inputs["Base Color"])
     # the strands as relief too: the highlight breaks into streaks instead of one smooth sheen
     bump = nodes.new("ShaderNodeBump")
@@ -159,7 +160,7 @@ def _hair_material(name: str) -> bpy.types.Material:
     return mat
 
 
-# ---------------------------------------------------------------------- node helpers
+# ---------------------------------------------------------------------- the people's own node groups
 def _new(name: str):
     mat = bpy.data.materials.new(name)
     mat.use_nodes = True
@@ -172,70 +173,26 @@ def _new(name: str):
 def _strands(nodes, links):
     """0..1 streaks a fraction of a millimetre across and centimetres long, running vertically in the
     cabin frame (down the head of a seated person)."""
-    coords = nodes.new("ShaderNodeTexCoord")
     stretch = nodes.new("ShaderNodeVectorMath")
     stretch.operation = "MULTIPLY"
     stretch.inputs[1].default_value = (1.0, 1.0, 0.06)
-    links.new(coords.outputs["Object"], stretch.inputs[0])
-    noise = nodes.new("ShaderNodeTexNoise")
-    noise.inputs["Scale"].default_value = 700.0
-    noise.inputs["Detail"].default_value = 2.0
-    links.new(stretch.outputs["Vector"], noise.inputs["Vector"])
-    return _map(nodes, links, noise.outputs["Fac"], 0.0, 1.0, lo_in=0.3, hi_in=0.7)
-
-
-def _noise(nodes, links, scale: float, detail: float = 2.0):
-    coords = nodes.new("ShaderNodeTexCoord")
-    noise = nodes.new("ShaderNodeTexNoise")
-    noise.inputs["Scale"].default_value = scale
-    noise.inputs["Detail"].default_value = detail
-    links.new(coords.outputs["Object"], noise.inputs["Vector"])
-    return noise.outputs["Fac"]
-
-
-def _map(nodes, links, value, lo: float, hi: float, lo_in: float = 0.0, hi_in: float = 1.0):
-    node = nodes.new("ShaderNodeMapRange")
-    node.clamp = True
-    links.new(value, node.inputs["Value"])
-    node.inputs["From Min"].default_value, node.inputs["From Max"].default_value = lo_in, hi_in
-    node.inputs["To Min"].default_value, node.inputs["To Max"].default_value = lo, hi
-    return node.outputs["Result"]
-
-
-def _attribute(nodes, field: str):
-    attr = nodes.new("ShaderNodeAttribute")
-    attr.attribute_type, attr.attribute_name = "GEOMETRY", field
-    return attr.outputs["Fac"]
+    links.new(N.object_coordinates(nodes), stretch.inputs[0])
+    fibres = N.noise(nodes, links, 700.0, 2.0, stretch.outputs["Vector"])
+    return N.map_range(nodes, links, fibres, 0.0, 1.0, lo_in=0.3, hi_in=0.7)
 
 
 def _inside(nodes, links, field: str):
     """1 where the vertex field is positive (interpolated across triangles: a straight, sharp edge)."""
-    return _step(nodes, links, _attribute(nodes, field), 0.0, above=True)
+    return N.math(nodes, links, "GREATER_THAN", N.attribute(nodes, field), 0.0)
 
 
 def _soft(nodes, links, field: str, feather_m: float, strands, density: float):
     """Coverage of a hair region: 0 outside, rising over ``feather_m`` inside its edge, where the
     strands decide (sparse hairs at the edge, dense inside), at most ``density``."""
-    depth = _map(nodes, links, _attribute(nodes, field), 0.0, 1.0, lo_in=0.0, hi_in=feather_m)
-    wisps = nodes.new("ShaderNodeMath")
-    wisps.operation = "MULTIPLY_ADD"      # depth * 2 + (strands - 1): 0 outside, hairs at the edge, 1 inside
-    links.new(depth, wisps.inputs[0])
-    wisps.inputs[1].default_value = 2.0
-    offset = nodes.new("ShaderNodeMath")
-    offset.operation = "SUBTRACT"
-    links.new(strands, offset.inputs[0])
-    offset.inputs[1].default_value = 1.0
-    links.new(offset.outputs[0], wisps.inputs[2])
-    return _map(nodes, links, wisps.outputs[0], 0.0, density)
-
-
-def _step(nodes, links, value, edge: float, above: bool = False):
-    """1 where value < edge (above=False) or value > edge (above=True), else 0."""
-    node = nodes.new("ShaderNodeMath")
-    node.operation = "GREATER_THAN" if above else "LESS_THAN"
-    links.new(value, node.inputs[0])
-    node.inputs[1].default_value = edge
-    return node.outputs[0]
+    depth = N.map_range(nodes, links, N.attribute(nodes, field), 0.0, 1.0, lo_in=0.0, hi_in=feather_m)
+    # depth * 2 + (strands - 1): 0 outside, hairs at the edge, 1 inside
+    wisps = N.math(nodes, links, "MULTIPLY_ADD", depth, 2.0, N.math(nodes, links, "SUBTRACT", strands, 1.0))
+    return N.map_range(nodes, links, wisps, 0.0, density)
 
 
 def _image(nodes, links, path: str):
@@ -246,41 +203,3 @@ def _image(nodes, links, path: str):
     tex.image.colorspace_settings.name = "Non-Color"
     links.new(uv.outputs["UV"], tex.inputs["Vector"])
     return tex.outputs["Color"]
-
-
-def _rgb(nodes, name: str, colour):
-    node = nodes.new("ShaderNodeRGB")
-    node.name = name
-    node.outputs[0].default_value = (*colour, 1.0)
-    return node
-
-
-def _value(nodes, value: float):
-    node = nodes.new("ShaderNodeValue")
-    node.outputs[0].default_value = value
-    return node.outputs[0]
-
-
-def _multiply_rgb(nodes, links, colour, factors):
-    node = nodes.new("ShaderNodeMix")
-    node.data_type = "RGBA"
-    node.blend_type = "MULTIPLY"
-    _socket(node.inputs, "Factor_Float").default_value = 1.0
-    links.new(colour, _socket(node.inputs, "A_Color"))
-    _socket(node.inputs, "B_Color").default_value = (*factors, 1.0)
-    return _socket(node.outputs, "Result_Color")
-
-
-def _mix(nodes, links, factor, a, b, kind: str = "RGBA"):
-    node = nodes.new("ShaderNodeMix")
-    node.data_type = kind
-    suffix = "Color" if kind == "RGBA" else "Float"
-    links.new(factor, _socket(node.inputs, "Factor_Float"))
-    links.new(a, _socket(node.inputs, f"A_{suffix}"))
-    links.new(b, _socket(node.inputs, f"B_{suffix}"))
-    return _socket(node.outputs, f"Result_{suffix}")
-
-
-def _socket(sockets, identifier: str):
-    """A socket by identifier (ShaderNodeMix has several sockets of one name, one per data type)."""
-    return next(s for s in sockets if s.identifier == identifier)

@@ -144,8 +144,9 @@ def _topology(kind: str, style: str) -> dict:
     rest = body.evaluate({})
     candidates = regions.bone_weights(model, ("head", "neck")) > 0.5
     style = hair.hair_style(rest, faces, candidates, style, 0.6 if kind == "child" else 1.0)
-    uv = model.texture_coordinates[model.face_texture_coordinate_indices].cpu().numpy().reshape(-1, 2)
-    return {"faces": faces, "uv": uv.astype(np.float32), "eye_uv": regions.eye_uv(model).reshape(-1, 2),
+    uv = model.texture_coordinates[model.face_texture_coordinate_indices].cpu().numpy()
+    return {"faces": faces, "uv": uv.reshape(-1, 2).astype(np.float32),
+            "eye_uv": regions.eye_uv(model, uv).reshape(-1, 2),
             "slots": regions.slots(model),
             "head": regions.head_mask(model, faces), "slot_names": np.array(regions.SLOTS),
             **{f"field_{k}": v.astype(np.float32) for k, v in fields.items()}, "field_scalp": style.field,

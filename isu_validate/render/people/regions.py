@@ -52,12 +52,13 @@ def slots(model) -> np.ndarray:
     return out
 
 
-def eye_uv(model) -> np.ndarray:
+def eye_uv(model, uv: np.ndarray) -> np.ndarray:
     """Per triangle corner, where it lies on the front of its eyeball: anny maps each eyeball's front
     hemisphere to a disc of its own UV island, so (uv - island centre) / island radius is 0 at the pupil
     and 1 at the eyeball's equator. The shader draws pupil, iris and white from its length (a smooth
-    circle, although the eyeball has few triangles). Zero on every other triangle."""
-    uv = model.texture_coordinates[model.face_texture_coordinate_indices].cpu().numpy().astype(np.float64)
+    circle, although the eyeball has few triangles). Zero on every other triangle. ``uv``: anny's UVs per
+    triangle corner, (triangles, 3, 2)."""
+    uv = np.asarray(uv, np.float64)
     out = np.zeros_like(uv)
     for side in ("eye_front.L", "eye_front.R"):
         island = uv_parts(model, [side])
