@@ -4,6 +4,8 @@ phone, wear the belt on the body, show their expression only on the face; the ch
 its seat; the posed-vertex cache is keyed, reused and never needs anny on a hit."""
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -26,6 +28,7 @@ POSES = [("FEMALE", "H1", "W1", "HAPPY", "NONE"), ("MALE", "H4", "W4", "SERIOUS"
          ("MALE", "H4", "W3", "SERIOUS", "P7"), ("FEMALE", "H2", "W2", "HAPPY", "P8"),
          ("MALE", "H3", "W1", "HAPPY", "P9"), ("FEMALE", "H4", "W4", "SERIOUS", "P10")]
 HAND_TOUCH = 0.002   # gripping fingers may press 2 mm into the rim's padding (the model's skin tolerance)
+PHONE_PRESS = 0.005  # ... and the finger pads 5 mm against a phone's (sharp-box) edges, as pads squash
 
 
 @pytest.fixture(scope="module")
@@ -84,6 +87,8 @@ def test_seated_driver_clears_seat_and_wheel_holds_wheel_or_phone_and_wears_the_
         assert m["clear_wheel_hands"] < 0.006, f"{key}: no hand touches the wheel"
     if key[4] != "NONE":
         assert m["phone_to_palm"] < 0.016, f"{key}: the phone is {m['phone_to_palm'] * 1000:.0f} mm from the hand"
+        assert m["phone_clear_hand"] > -PHONE_PRESS, f"{key}: {-m['phone_clear_hand'] * 1000:.1f} mm into the phone"
+        assert m["phone_front_touch"] >= 20, f"{key}: no finger closes round the phone's edge ({m})"
     # the belt: never through the body, resting on it across the chest and the lap
     assert m["belt_diagonal_min"] > 0.001 and m["belt_lap_min"] > 0.001, key
     assert m["belt_diagonal_resting"] > 0.5 and m["belt_lap_resting"] > 0.3, (key, m)
@@ -162,6 +167,21 @@ def test_people_commands_warm_and_check_the_cache(people, capsys):
     assert "clear_wheel_hands" in out and "belt_lap_resting" in out and "child_rear_clear_cs_platepad" in out
 
 
+def test_a_phone_on_an_open_palm_is_not_gripped():
+    """The grip measure tells a hand closed round the phone's edge from a phone lying on a flat hand."""
+    from isu_validate.render.people.checks import phone_grip_measures
+    R, centre = np.eye(3), np.zeros(3)
+    grid = np.stack(np.meshgrid(np.linspace(-0.05, 0.05, 11), np.linspace(-0.05, 0.05, 11)), -1).reshape(-1, 2)
+    palm = np.column_stack([grid, np.full(len(grid), -0.006)])               # under the phone's back
+    flat = phone_grip_measures(palm, centre, R)
+    assert flat["phone_front_touch"] == 0 and flat["phone_clear_hand"] > 0
+    tips = np.column_stack([np.full(21, 0.039), np.linspace(-0.04, 0.04, 21), np.full(21, 0.003)])  # round the edge
+    closed = phone_grip_measures(np.vstack([palm, tips]), centre, R)
+    assert closed["phone_front_touch"] == 21
+    inside = phone_grip_measures(np.array([[0.0, 0.0, -0.002]]), centre, R)
+    assert inside["phone_clear_hand"] == pytest.approx(-0.00225, abs=1e-6)
+
+
 def test_people_check_ranks_a_belt_into_the_body_worse_than_one_off_it():
     """`people check` reports the worst body per figure: smaller is worse for clearances and a belt's
     distance to the body (negative: through it), a larger gap for the phone in the palm."""
@@ -169,6 +189,7 @@ def test_people_check_ranks_a_belt_into_the_body_worse_than_one_off_it():
     assert is_worse("belt_lap_min", -0.001, 0.020) and not is_worse("belt_lap_min", 0.020, -0.001)
     assert is_worse("clear_wheel_hands", -0.01, 0.0) and is_worse("belt_diagonal_resting", 0.4, 0.6)
     assert is_worse("phone_to_palm", 0.03, 0.01) and is_worse("phone_to_palm", -0.03, 0.01)
+    assert is_worse("phone_clear_hand", -0.004, 0.0) and is_worse("phone_front_touch", 3, 40)
 
 
 def test_eyes_teeth_and_hair_styles_are_where_a_face_has_them(people, model):
@@ -199,3 +220,12 @@ def test_eyes_teeth_and_hair_styles_are_where_a_face_has_them(people, model):
     assert people_module.hair_style_of({"driver_hair_style": "BUZZ"}, "female") == "buzz"
     assert people_module.hair_style_of({}, "female") == "bob"
     assert people_module.hair_style_of({"driver_hair_style": "BY_GENDER"}, "male") == "short"
+
+
+def test_a_phone_position_with_a_malformed_finger_direction_is_refused_with_the_fix(tmp_path):
+    from isu_validate.render.cabin import CabinRigError
+    text = (Path(__file__).parents[1] / "rigs" / "cabins" / "default.toml").read_text()
+    bad = tmp_path / "bad.toml"
+    bad.write_text(text.replace("fingers = [-1.0, 0.0, 0.5]", "fingers = \"back\"", 1))
+    with pytest.raises(CabinRigError, match=r"phone_positions.P1\] fingers must be a direction \[x, y, z\]"):
+        load_cabin(bad)

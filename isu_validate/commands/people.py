@@ -38,7 +38,11 @@ def cmd_check(args) -> int:
     worst = check(_people(args), args.limit)
     print(f"{'measure':<32} {'worst':>9}  body")
     for name, (value, key) in sorted(worst.items()):
-        unit = "" if name.endswith("_resting") else " mm"
-        shown = f"{value:.2f}" if name.endswith("_resting") else f"{value * 1000:.1f}"
+        if name.endswith("_resting"):
+            shown, unit = f"{value:.2f}", ""
+        elif name.endswith("_touch"):      # a count of vertices
+            shown, unit = f"{value:.0f}", " vertices"
+        else:
+            shown, unit = f"{value * 1000:.1f}", " mm"
         print(f"{name:<32} {shown:>9}{unit}  {' '.join(key)}", file=sys.stdout)
     return 0

@@ -76,6 +76,9 @@ def _check(raw: dict, where: str) -> None:
         if spec.get("hand") not in ("left", "right") or spec.get("relative_to") not in ("head", "shoulder", "wheel"):
             raise CabinRigError(f"{where}: [phone_positions.{name}] needs hand = 'left'|'right' and "
                                 f"relative_to = 'head'|'shoulder'|'wheel'")
+        if "fingers" in spec and not _triple(spec["fingers"]):
+            raise CabinRigError(f"{where}: [phone_positions.{name}] fingers must be a direction [x, y, z] "
+                                f"(where the fingers point; leave it out for away from the shoulder)")
 
 
 def _triple(value) -> bool:

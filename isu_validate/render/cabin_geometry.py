@@ -73,6 +73,12 @@ def rot_y(angle_rad: float) -> np.ndarray:
 
 
 RIM_TUBE = 0.12   # tube radius of the rim as a share of the wheel's radius
+PHONE_SIZE = (0.074, 0.152, 0.0085)   # the smartphone: width (local x), length (y), thickness (z, screen on +z)
+
+
+def phone_box(centre, R) -> Box:
+    """The phone held or lying at ``centre``, turned by ``R``: what fingers close on."""
+    return Box("phone", tuple(np.asarray(centre, float)), PHONE_SIZE, np.asarray(R, float), rounded=0.15)
 
 
 CARRIER_RECLINE_DEG = 35.0   # the rear-facing carrier's back plate, from the horizontal

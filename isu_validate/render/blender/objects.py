@@ -10,7 +10,7 @@ import bpy
 import numpy as np
 from mathutils import Vector
 
-from ..cabin_geometry import CHILD_SEAT_PADS, child_seat_boxes, pitch
+from ..cabin_geometry import CHILD_SEAT_PADS, PHONE_SIZE, child_seat_boxes, pitch
 from ..labels import INSTANCE_ID
 from .. import product_art as art
 from . import materials
@@ -128,7 +128,7 @@ def build_phone(coll, instance: str) -> Group:
     lens = M.material("phone_lens", (0.002, 0.002, 0.003), roughness=0.02, specular=1.0)
     ring = M.material("phone_lens_ring", (0.5, 0.5, 0.52), roughness=0.25, metallic=1.0)
     flash = M.material("phone_flash", (0.8, 0.75, 0.6), roughness=0.3)
-    g.add(M.box("phone_body", (0, 0, 0), (0.074, 0.152, 0.0085), case, coll, pid, rounded=0.15))
+    g.add(M.box("phone_body", (0, 0, 0), PHONE_SIZE, case, coll, pid, rounded=0.15))
     g.add(M.box("phone_front", (0, 0, 0.0043), (0.071, 0.149, 0.0008), glass, coll, pid, rounded=0.06))
     screen = M.image_material("phone_home_screen", art.home_screen, "plane", roughness=0.05,
                               emission_strength=1.6, specular=0.6)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..cabin_geometry import seat_boxes, wheel_solids
+from ..cabin_geometry import phone_box, seat_boxes, wheel_solids
 from .seated import shifted_seat
 from .surface import Surface
 
@@ -26,7 +26,18 @@ def driver_measures(state: dict, topology: dict, cabin: dict) -> dict[str, float
     out.update(belt_measures(state, topology))
     if "phone_centre" in state:
         out["phone_to_palm"] = float(np.linalg.norm(v[hands] - state["phone_centre"], axis=1).min())
+        out.update(phone_grip_measures(v[hands], state["phone_centre"], state["phone_rotation"]))
     return out
+
+
+def phone_grip_measures(hand: np.ndarray, centre, rotation) -> dict[str, float]:
+    """How the hand holds the phone: its deepest point into the phone (negative = inside), and how many
+    of its vertices touch the phone's screen half (fingers or thumb round an edge; none when the phone
+    only lies on an open palm)."""
+    box = phone_box(centre, rotation)
+    d = box.sdf(hand)
+    front = (hand - np.asarray(centre, float)) @ np.asarray(rotation, float)[:, 2] > 0
+    return {"phone_clear_hand": float(d.min()), "phone_front_touch": float(((d < 0.005) & front).sum())}
 
 
 def belt_measures(state: dict, topology: dict) -> dict[str, float]:

@@ -123,3 +123,72 @@ def _angle_to_circle(pivot, point, centre, axis, radius: float, max_deg: float) 
     best = min(candidates, key=abs)
     limit = np.radians(max_deg)
     return float(np.clip(best, -limit, limit))
+
+
+FINGER_RADIUS = (0.0105, 0.0095, 0.0085)   # a finger's bone axis to its skin, per phalanx, for a 0.11 m hand
+CLOSE_MAX_DEG = (90.0, 100.0, 80.0)        # how far each finger joint bends at most
+THUMB_MAX_DEG = (0.0, 50.0, 70.0)          # the thumb's base joint only opens (out of the way), never closes
+STEP_DEG = 2.0
+
+
+def close_on(posed: Posed, side: str, sdf, palm_normal) -> dict[str, np.ndarray]:
+    """Finger and thumb deltas that close a hand on a solid (``sdf``: points -> signed distances), as a
+    hand closes on what it holds: each joint in turn, from the knuckle out, bends until the rest of the
+    finger touches the solid (its skin ``FINGER_RADIUS`` off it) or reaches its limit. Fingers bend towards
+    the palm (``palm_normal``), the thumb towards the solid; a segment that already cuts into the solid
+    opens until it clears it. ``posed``: the hand in place with straight fingers."""
+    scale = hand_frame(posed, side).length / 0.11
+    p = _unit(palm_normal)
+    deltas = {}
+    for finger in (1, *FINGERS):
+        bones = [f"finger{finger}-{j}.{side}" for j in (1, 2, 3)]
+        joints = [posed.head(b) for b in bones]
+        joints.append(joints[2] + (joints[2] - joints[1]) * 0.8)        # the tip
+        G, total = _parent_rot(posed, finger, side), np.eye(3)
+        limits = THUMB_MAX_DEG if finger == 1 else CLOSE_MAX_DEG
+        for j, bone in enumerate(bones):
+            towards = -p if finger == 1 else p
+            axis = np.cross(joints[j + 1] - joints[j], towards)
+            if np.linalg.norm(axis) < 1e-9:
+                continue
+            radius = np.array(FINGER_RADIUS[j:]) * scale
+            angle = _close_angle(joints[j], joints[j + 1:], _unit(axis), sdf, radius, limits[j])
+            Q = rotation(axis, angle)
+            joints[j + 1:] = [joints[j] + Q @ (q - joints[j]) for q in joints[j + 1:]]
+            deltas[bone] = delta_for(total @ G, Q)
+            total = Q @ total
+    return deltas
+
+
+def _close_angle(pivot, chain, axis, sdf, radius, max_deg: float) -> float:
+    """The bend about ``axis`` through ``pivot`` at which the chain (the points after the pivot) first
+    comes within its skin ``radius`` of the solid: 0 when it already touches, negative (opening) when it
+    cuts in, ``max_deg`` when it never touches."""
+    samples, skin = _samples(pivot, chain, radius)
+
+    def gap(deg):
+        Q = rotation(axis, np.radians(deg))
+        return (sdf(pivot + (samples - pivot) @ Q.T) - skin).min()
+
+    if gap(0.0) < 0.0:                                           # cuts in: open until clear
+        for deg in np.arange(-STEP_DEG, -90.0 - STEP_DEG, -STEP_DEG):
+            if gap(deg) >= 0.0:
+                return float(np.radians(deg))
+        return 0.0
+    angle = 0.0
+    for deg in np.arange(STEP_DEG, max_deg + STEP_DEG / 2, STEP_DEG):
+        if gap(deg) < 0.0:
+            break
+        angle = deg
+    return float(np.radians(angle))
+
+
+def _samples(pivot, chain, radius) -> tuple[np.ndarray, np.ndarray]:
+    """Points along each segment of the chain after the pivot, and the skin radius at each."""
+    points, skin, start = [], [], pivot
+    for q, r in zip(chain, radius):
+        for s in (0.25, 0.5, 0.75, 1.0):
+            points.append(start + (q - start) * s)
+            skin.append(r)
+        start = q
+    return np.array(points), np.array(skin)

@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..cabin_geometry import RIM_TUBE, rim_point, seat_boxes, wheel_frame
-from .hands import HandFrame, curl, hand_frame, turn_to, wrap
+from ..cabin_geometry import PHONE_SIZE, RIM_TUBE, phone_box, rim_point, seat_boxes, wheel_frame
+from .hands import FINGERS, HandFrame, close_on, curl, hand_frame, turn_to, wrap
 from .limbs import Limb, reach
 from .regions import bone_weights
 from .skeleton import Body, Posed, align, rigid, rot_x, rot_z, rotation
@@ -23,14 +23,15 @@ GAP = 0.004              # clearance between the body and the seat it rests on (
 RECLINE_DEG = 14.0       # the torso leans back with the backrest (17 deg): a little upright of it
 GRIP_CLOCK = {"L": 150.0, "R": 30.0}   # ten and two: angles from three o'clock
 GRIP_CURL = (55.0, 60.0, 45.0)         # finger joints bent towards the rim before wrapping (degrees)
-PHONE_CURL = (20.0, 25.0, 15.0)        # fingers bent round a phone's edges
+PHONE_ALONG = 0.85                     # the phone's middle lies across the palm this far from wrist to knuckles
+PHONE_SHIFT = 0.03                     # ... and this far towards its top from the hand's middle (m)
 PALM_HALF = 0.014                      # from the hand's axis to the palm's surface (m)
 GRIP_PALM = 0.036                      # the hand's axis this far off the rim's surface (m)
 GRIP_ALONG = 0.55                      # the rim crosses the hand this far from wrist to knuckles
 SKIN_GAP = 0.016                       # finger joints wrap this far outside the rim (half a finger's thickness)
 ANKLE_HEIGHT = 0.11      # ankle joints above the floor (heels on it)
 PEDAL_X = 0.56           # feet no further forward than the pedals (the footwell ends at the dashboard)
-PHONE_THICKNESS = 0.009
+PHONE_THICKNESS = PHONE_SIZE[2]
 SIDE = {"left": "L", "right": "R"}      # the driver's left hand is anny's .L (towards cabin +y)
 SEAT_TRACK = (-0.08, 0.22)   # the seat slides this far back/forward to fit the driver (m)
 REACH = 0.86                 # shoulder to palm at this share of the arm's length: elbows a little bent
@@ -69,14 +70,18 @@ def seat_and_pose(body: Body, rig: dict, phone_position: str = "NONE") -> Driver
         posed = body.evaluate({**deltas, **arm})
         for side, grip in grips.items():
             grip.palm_target = grip.palm_target + grip.palm_target - hand_frame(posed, side).palm(grip.along)
-    # hands on the wheel close round the rim, measured on the posed hand with straight fingers
+    # hands close round the rim or the phone, measured on the posed hand with straight fingers
     straight = body.evaluate({**deltas, **{b: m for b, m in arm.items() if not b.startswith("finger")}})
+    phone = None
     for side, grip in grips.items():
         if grip.on_wheel:
             point, tangent, _ = rim_point(rig["steering_wheel"], GRIP_CLOCK[side])
             arm.update(wrap(straight, side, point, tangent, rig["steering_wheel"]["radius"] * RIM_TUBE + SKIN_GAP))
+        else:
+            frame = hand_frame(straight, side)
+            phone = _phone_in(frame, spec, _palm_skin(straight, frame, side, body.model))
+            arm.update(close_on(straight, side, phone_box(*phone).sdf, frame.p))
     posed = body.evaluate({**deltas, **arm})
-    phone = _phone_in(hand_frame(posed, SIDE[spec["hand"]]), spec) if spec else None
     return DriverPose(posed, {**deltas, **arm}, phone, head_centre, shift)
 
 
@@ -199,16 +204,19 @@ def _wheel_grip(rest: Posed, side: str, rig: dict) -> Grip:
 
 
 def _phone_grip(rest: Posed, side: str, spec: dict, rig: dict, head_centre: np.ndarray) -> Grip:
-    """The palm flat on the phone's back, the hand pointing away from the shoulder."""
+    """The phone's back in the palm, its lower half in the hand: the hand lies across the phone's width,
+    pointing away from the shoulder (a right hand reading closes round the phone's left edge, seen from
+    the screen) or as near the rig's ``fingers`` direction as it can, the phone's top beyond the hand."""
     R = _euler_xyz(spec["rotation_deg"])
     xp, yp, zp = R[:, 0], R[:, 1], R[:, 2]
     ref = {"head": head_centre,
            "shoulder": (rest.head("upperarm01.L") + rest.head("upperarm01.R")) / 2,
            "wheel": np.asarray(rig["steering_wheel"]["centre"], float)}[spec["relative_to"]]
     centre = ref + np.asarray(spec["offset"], float)
-    away = _unit(centre - rest.head(f"upperarm01.{side}"))
-    a = max((xp, -xp, yp, -yp), key=lambda v: v @ away)
-    return _grip(rest, side, a, zp, centre - zp * (PHONE_THICKNESS / 2 + PALM_HALF), 0.5, PHONE_CURL, False)
+    away = np.asarray(spec.get("fingers", centre - rest.head(f"upperarm01.{side}")), float)
+    a = xp if xp @ away > 0 else -xp
+    palm = centre - zp * (PHONE_THICKNESS / 2 + PALM_HALF) - yp * PHONE_SHIFT
+    return _grip(rest, side, a, zp, palm, PHONE_ALONG, (0.0, 0.0, 0.0), False)
 
 
 def _grip(rest, side, a, p, palm_target, along, fingers, on_wheel) -> Grip:
@@ -227,9 +235,21 @@ def _arm(rest: Posed, side: str, grip: Grip) -> dict:
     return deltas
 
 
-def _phone_in(frame: HandFrame, spec: dict) -> tuple[np.ndarray, np.ndarray]:
-    """The phone lying on the posed palm, turned as the rig says."""
-    return frame.palm(0.5, PALM_HALF + PHONE_THICKNESS / 2), _euler_xyz(spec["rotation_deg"])
+def _phone_in(frame: HandFrame, spec: dict, palm_skin: float) -> tuple[np.ndarray, np.ndarray]:
+    """The phone on the posed palm's skin (as ``_phone_grip`` put it), turned as the rig says."""
+    R = _euler_xyz(spec["rotation_deg"])
+    return frame.palm(PHONE_ALONG, palm_skin + PHONE_THICKNESS / 2) + R[:, 1] * PHONE_SHIFT, R
+
+
+def _palm_skin(posed: Posed, frame: HandFrame, side: str, model) -> float:
+    """How far the palm's skin stands off the hand's axis where the phone lies (the pads at the
+    knuckles stand out further than the middle of the palm, PALM_HALF)."""
+    bones = [f"metacarpal{k}.{side}" for k in (1, 2, 3, 4)] + [f"finger{k}-1.{side}" for k in FINGERS]
+    palm = bone_weights(model, tuple(bones)) > 0.5
+    local = posed.vertices[palm].astype(float) - frame.wrist
+    along = local @ frame.a / frame.length
+    under = np.abs(along - PHONE_ALONG) < PHONE_SIZE[0] / 2 / frame.length
+    return float(max(PALM_HALF, (local[under] @ frame.p).max()) + 0.0005)
 
 
 # ---------------------------------------------------------------------- helpers

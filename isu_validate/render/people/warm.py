@@ -65,7 +65,8 @@ def check(people: People, limit: int | None = None) -> dict:
 
 def is_worse(name: str, value: float, than: float) -> bool:
     """Whether a driver figure is worse than another: a clearance, a belt's smallest distance to the body
-    (negative: through it) or its resting share the smaller it is; the phone's gap to the palm the larger."""
-    if name.endswith(("_resting", "_min")) or name.startswith("clear"):
+    (negative: through it), its resting share, the hand's clearance to the phone and its touch on the
+    phone's screen half the smaller it is; the phone's gap to the palm the larger."""
+    if name.endswith(("_resting", "_min")) or name.startswith(("clear", "phone_clear", "phone_front")):
         return value < than
     return abs(value) > abs(than)
