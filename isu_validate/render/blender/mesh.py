@@ -179,17 +179,26 @@ def unit_torus(major: float = 1.0, minor: float = 0.1, segments: int = 40) -> bp
 
 def lathe(name: str, profile, segments: int = 32) -> bpy.types.Mesh:
     """A surface of revolution round z through (radius, z) points from the base up, closed at both ends
-    (a bottle, a can); smooth-shaded, built once per name."""
+    (a bottle, a can); smooth-shaded, built once per name. A point on the axis (radius 0) is one vertex
+    that the next ring fans out from; an end off the axis is closed by a flat cap."""
+    def ring(bm, r, z):
+        if r == 0.0:
+            return [bm.verts.new((0.0, 0.0, z))] * segments
+        return [bm.verts.new((r * math.cos(2 * math.pi * k / segments), r * math.sin(2 * math.pi * k / segments), z))
+                for k in range(segments)]
+
     def build(bm):
-        rings = []
-        for r, z in profile:
-            rings.append([bm.verts.new((r * math.cos(2 * math.pi * k / segments),
-                                        r * math.sin(2 * math.pi * k / segments), z)) for k in range(segments)])
+        rings = [ring(bm, r, z) for r, z in profile]
         for a, b in zip(rings, rings[1:]):
             for k in range(segments):
-                bm.faces.new((a[k], a[(k + 1) % segments], b[(k + 1) % segments], b[k]))
-        bm.faces.new(rings[0][::-1])
-        bm.faces.new(rings[-1])
+                quad = (a[k], a[(k + 1) % segments], b[(k + 1) % segments], b[k])
+                corners = list(dict.fromkeys(quad))          # a pole's repeated vertex makes it a triangle
+                if len(corners) >= 3:
+                    bm.faces.new(corners)
+        if profile[0][0] > 0.0:
+            bm.faces.new(rings[0][::-1])
+        if profile[-1][0] > 0.0:
+            bm.faces.new(rings[-1])
         _smooth(bm)
     return _cached(f"lathe_{name}", build)
 
