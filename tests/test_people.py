@@ -102,6 +102,9 @@ def test_expression_moves_only_the_face(people):
     head_vertices = np.unique(topology["faces"][topology["head"]])
     body = np.setdiff1d(np.arange(len(moved)), head_vertices)
     assert moved[body].max() < 0.001 and moved[head_vertices].max() > 0.004   # the chin pulls the neck < 1 mm
+    # each expression folds the face's skin where it gathers it, and nowhere else
+    for state in (happy, serious):
+        assert np.all(state["crease"][body] == 0.0) and state["crease"][head_vertices].max() > 0.3
     np.testing.assert_allclose(happy["belt_diagonal"], serious["belt_diagonal"])
 
 
@@ -222,6 +225,28 @@ def test_eyes_teeth_and_hair_styles_are_where_a_face_has_them(people, model):
     assert people_module.hair_style_of({"driver_hair_style": "BY_GENDER"}, "male") == "short"
 
 
+def test_locks_of_hair_grow_from_the_shell_and_leave_the_forehead_free(people):
+    """Short hair and the bob carry thousands of locks rooted on their shell (the buzz cut none); a lock
+    is as long as its style says, the same on every frame, and none on the face's side hangs below the
+    hairline's height over the eyes (no fringe the style does not have)."""
+    key = ("MALE", "H3", "W2", "HAPPY", "P3")
+    for kind, style, (lo, hi) in (("male", "short", (0.018, 0.035)), ("female", "bob", (0.040, 0.080))):
+        topology = _load(people.topology(kind, style))
+        state = _load(people.driver_state("FEMALE" if kind == "female" else "MALE", *key[1:], style))
+        strands = state["strands"]
+        assert len(strands) > 5000 and strands.shape[1:] == (4, 3)
+        assert lo - 1e-6 <= topology["strand_length"].max() <= hi + 1e-6
+        corners = state["hair"][topology["hair_faces"][topology["strand_face"]]]
+        on_shell = np.einsum("sk,skd->sd", topology["strand_bary"], corners)
+        assert np.linalg.norm(strands[:, 0] - on_shell, axis=1).max() < 0.001      # rooted in the shell
+        eyes = state["head_centre"] + np.array([0.07, 0.0, 0.01])            # seated.py's head centre
+        face_side = strands[:, 0, 0] > eyes[0] - 0.02                   # the cabin's +x: the front of the head
+        assert face_side.any() and strands[face_side, -1, 2].min() > eyes[2] + 0.02, style     # above the brows
+        again = _load(people.driver_state("FEMALE" if kind == "female" else "MALE", *key[1:], style))
+        np.testing.assert_array_equal(again["strands"], strands)
+    assert len(_load(people.topology("male", "buzz"))["strand_face"]) == 0
+
+
 def test_a_phone_position_with_a_malformed_finger_direction_is_refused_with_the_fix(tmp_path):
     from isu_validate.render.cabin import CabinRigError
     text = (Path(__file__).parents[1] / "rigs" / "cabins" / "default.toml").read_text()
@@ -229,3 +254,26 @@ def test_a_phone_position_with_a_malformed_finger_direction_is_refused_with_the_
     bad.write_text(text.replace("fingers = [-1.0, 0.0, 0.5]", "fingers = \"back\"", 1))
     with pytest.raises(CabinRigError, match=r"phone_positions.P1\] fingers must be a direction \[x, y, z\]"):
         load_cabin(bad)
+
+
+def test_creases_mark_skin_an_expression_gathers_and_nothing_else():
+    """The crease field is the skin's compression against the face at rest: 0 at rest, 0 where the skin
+    stretches, up to 1 where it gathers, 0 outside its mask; a degenerate (zero-length) edge is no NaN."""
+    from isu_validate.render.people.creases import FULL, crease_field
+    n = 6
+    x, y = np.meshgrid(np.arange(n, dtype=float), np.arange(n, dtype=float))
+    rest = np.column_stack([x.ravel(), y.ravel(), np.zeros(n * n)]) * 0.01
+    quads = [(j * n + i, j * n + i + 1, (j + 1) * n + i) for j in range(n - 1) for i in range(n - 1)]
+    quads += [(j * n + i + 1, (j + 1) * n + i + 1, (j + 1) * n + i) for j in range(n - 1) for i in range(n - 1)]
+    faces = np.array(quads)
+    everywhere = np.ones(n * n, bool)
+    assert np.all(crease_field(faces, rest, rest, everywhere) == 0.0)
+    squeezed = rest * np.array([1.0 - FULL, 1.0, 1.0])          # gathered across x by a full crease's share
+    field = crease_field(faces, rest, squeezed, everywhere)
+    assert 0.2 < field.mean() < 1.0 and field.max() <= 1.0
+    assert np.all(crease_field(faces, rest, rest * 1.3, everywhere) == 0.0)          # stretched: no fold
+    half = rest[:, 0] < 0.025
+    assert np.all(crease_field(faces, rest, squeezed, half)[~half] == 0.0)
+    rest_dup = rest.copy()
+    rest_dup[1] = rest_dup[0]                                     # two vertices on one point at rest
+    assert np.isfinite(crease_field(faces, rest_dup, squeezed, everywhere)).all()

@@ -73,6 +73,15 @@ def value(nodes, number: float):
     return node.outputs[0]
 
 
+def bump(nodes, links, height, strength: float, distance_m: float):
+    """A normal bent by ``height`` (0..1) as a relief ``distance_m`` deep at ``strength``."""
+    node = nodes.new("ShaderNodeBump")
+    node.inputs["Strength"].default_value = strength
+    node.inputs["Distance"].default_value = distance_m
+    _feed(links, node.inputs["Height"], height)
+    return node.outputs["Normal"]
+
+
 def attribute(nodes, name: str):
     """A mesh attribute (a per-vertex field) by name."""
     node = nodes.new("ShaderNodeAttribute")

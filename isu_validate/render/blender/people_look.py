@@ -38,6 +38,8 @@ _GARMENTS = (("trousers", (0.02, 0.03, 0.07), 0.9), ("shoes", (0.015, 0.012, 0.0
 # eye disc radii (1 = the eyeball's equator, render/people/regions.eye_uv; about angle / 90 degrees, measured on
 # anny's eyeball): a 24 mm eye's pupil and its 12 mm iris seen through the cornea's bulge
 _PUPIL, _IRIS = 0.13, 0.34
+CREASE_SHADE = 0.3        # how far a full crease (people/creases.py) darkens the skin towards a fold's shadow
+CREASE_RELIEF_M = 0.004   # ... and how far it bulges
 
 
 class Look:
@@ -85,6 +87,11 @@ def _body_material(name: str, lips_mask: str) -> bpy.types.Material:
         rough = N.mix(nodes, links, inside, rough, N.value(nodes, roughness), "FLOAT")
     lips = _image(nodes, links, lips_mask)
     colour = N.mix(nodes, links, lips, colour, N.multiply(nodes, links, 1.0, skin, (0.78, 0.48, 0.46)))
+    # skin the expression gathers (people/creases.py) bulges, folding at its edges, and its folds are darker
+    crease = N.attribute(nodes, "crease")
+    colour = N.multiply(nodes, links, N.math(nodes, links, "MULTIPLY", crease, CREASE_SHADE), colour,
+                        (0.45, 0.36, 0.34))
+    links.new(N.bump(nodes, links, crease, 1.0, CREASE_RELIEF_M), bsdf.inputs["Normal"])
     hair = N.rgb(nodes, "colour_hair", HAIR_COLOURS["BROWN"])
     strands = _strands(nodes, links)
     hair_shaded = N.mix(nodes, links, strands, N.multiply(nodes, links, 1.0, hair, (0.8, 0.8, 0.8)),
@@ -152,11 +159,7 @@ def _hair_material(name: str) -> bpy.types.Material:
                   N.multiply(nodes, links, 1.0, hair, (1.25, 1.22, 1.2)))
     links.new(colour, bsdf.inputs["Base Color"])
     # the strands as relief too: the highlight breaks into streaks instead of one smooth sheen
-    bump = nodes.new("ShaderNodeBump")
-    bump.inputs["Strength"].default_value = 0.6
-    bump.inputs["Distance"].default_value = 0.0005
-    links.new(strands, bump.inputs["Height"])
-    links.new(bump.outputs["Normal"], bsdf.inputs["Normal"])
+    links.new(N.bump(nodes, links, strands, 0.6, 0.0005), bsdf.inputs["Normal"])
     return mat
 
 

@@ -134,3 +134,78 @@ def hair_vertices(style: HairStyle, vertices: np.ndarray, normals: np.ndarray) -
     normal = (1 - t) * normals[style.i] + t * normals[style.j]
     normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-12)
     return (skin + normal * style.thickness[:, None]).astype(np.float32)
+
+
+# ---------------------------------------------------------------------- strands over the shell
+# locks per square metre of shell and their length range (m) per style: the buzz cut has none (its
+# few millimetres are the shell's texture)
+_STRANDS = {"short": (350_000.0, (0.018, 0.035)), "bob": (300_000.0, (0.040, 0.080)), "buzz": (0.0, (0.0, 0.0))}
+STRAND_POINTS = 4
+
+
+@dataclass(frozen=True)
+class Strands:
+    """Locks of hair rooted on the shell: each at barycentric ``bary`` in shell triangle ``face``, of
+    ``length`` (m) and ``lift`` (how far it stands off the shell, a share of its length); they flow from
+    the crown (shell vertex ``crown``) down and round the head."""
+    face: np.ndarray
+    bary: np.ndarray
+    length: np.ndarray
+    lift: np.ndarray
+    crown: int
+
+
+def strand_roots(style: HairStyle, shell: np.ndarray, rest: Posed, scale: float = 1.0, seed: int = 0) -> Strands:
+    """Roots spread evenly (by area) over a style's shell ``shell`` (its vertices on the rest body), the
+    same on every frame (``seed``). On the face's side of the head a lock is no longer than its root's
+    height above the hairline, so no fringe falls over the forehead that the style does not have."""
+    density, (lo, hi) = _STRANDS[style.name]
+    rng = np.random.default_rng(seed)
+    tri = shell[style.faces]
+    area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+    n = int(density * area.sum() * scale ** 2)
+    face = rng.choice(len(area), size=n, p=area / area.sum()) if n else np.zeros(0, int)
+    u, v = rng.random(n), rng.random(n)
+    flip = u + v > 1.0
+    u, v = np.where(flip, 1.0 - u, u), np.where(flip, 1.0 - v, v)
+    bary = np.column_stack([1.0 - u - v, u, v])
+    corners = style.faces[face]
+    root = np.einsum("sk,skd->sd", bary, shell[corners])
+    t = style.t[corners]
+    above = (bary * ((1 - t) * style.field[style.i[corners]] + t * style.field[style.j[corners]])).sum(axis=1)
+    eyes = (rest.head("eye.L") + rest.head("eye.R")) / 2
+    towards_face = root[:, 1] < eyes[1] + 0.075 * scale            # rest faces -Y: in front of the ears
+    length = rng.uniform(lo, hi, n) * scale
+    length = np.where(towards_face, np.clip(above, 0.002, None).clip(None, length), length)
+    crown = int(np.argmax(shell[:, 2] + 0.4 * shell[:, 1]))          # top and back of the head
+    return Strands(face.astype(np.int32), bary.astype(np.float32), length.astype(np.float32),
+                   rng.uniform(0.05, 0.25, n).astype(np.float32), crown)
+
+
+def strand_points(strands: Strands, shell_faces: np.ndarray, shell: np.ndarray) -> np.ndarray:
+    """(S, STRAND_POINTS, 3) points of each lock on a posed shell: from just under the shell at its root,
+    along the flow from the crown (drooping with gravity), standing off by its lift, the tip back down."""
+    if not len(strands.face):
+        return np.zeros((0, STRAND_POINTS, 3), np.float32)
+    normals = vertex_normals(shell.astype(np.float64), shell_faces)
+    corners = shell_faces[strands.face]
+    bary = strands.bary.astype(np.float64)[..., None]
+    root = (bary * shell[corners]).sum(axis=1)
+    normal = _unit((bary * normals[corners]).sum(axis=1))
+    flow = _tangent(root - shell[strands.crown], normal)
+    droop = _tangent(np.tile([0.0, 0.0, -1.0], (len(root), 1)), normal)
+    direction = _unit(flow + 0.8 * droop + 1e-6 * normal)
+    step = (strands.length / (STRAND_POINTS - 1))[:, None]
+    lift = strands.lift[:, None]
+    points = [root - 0.0005 * normal]
+    for rise in (1.0, 0.4, -0.6)[:STRAND_POINTS - 1]:
+        points.append(points[-1] + step * (direction + rise * lift * normal))
+    return np.stack(points, axis=1).astype(np.float32)
+
+
+def _tangent(v: np.ndarray, normal: np.ndarray) -> np.ndarray:
+    return _unit(v - normal * (v * normal).sum(axis=1, keepdims=True))
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / np.maximum(np.linalg.norm(v, axis=1, keepdims=True), 1e-12)

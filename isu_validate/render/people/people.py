@@ -12,7 +12,7 @@ import json
 
 import numpy as np
 
-from . import belt, child, expressions, hair, regions, seated
+from . import belt, child, creases, expressions, hair, regions, seated
 from .model import load_model
 from .phenotype import child_phenotype, driver_phenotype
 from .skeleton import Body
@@ -86,9 +86,15 @@ class People:
         with _posing(self):
             pose = self._driver_pose(gender, height, weight, phone_position)
             topo = load_entry(self.topology(kind, style))
-            body = Body(load_model(), driver_phenotype(gender, height, weight), expressions.facial_actions(emotion))
-            posed = body.evaluate(_deltas_from(pose))
-            state = {**_surface_state(posed, topo), **{k: pose[k] for k in pose if not k.startswith("d_")}}
+            phenotype, deltas = driver_phenotype(gender, height, weight), _deltas_from(pose)
+            posed = Body(load_model(), phenotype, expressions.facial_actions(emotion)).evaluate(deltas)
+            rest = Body(load_model(), phenotype, expressions.facial_actions("NEUTRAL")).evaluate(deltas)
+            face = np.zeros(len(rest.vertices), bool)
+            face[topo["faces"][topo["head"]]] = True
+            crease = creases.crease_field(topo["faces"], rest.vertices.astype(np.float64),
+                                          posed.vertices.astype(np.float64), face)
+            state = {**_surface_state(posed, topo), "crease": crease,
+                     **{k: pose[k] for k in pose if not k.startswith("d_")}}
             return self.store.put("driver", key, state)
 
     def child_state(self, front_facing: bool):
@@ -143,7 +149,10 @@ def _topology(kind: str, style: str) -> dict:
         fields = regions.adult_fields(body, female=kind == "female")
     rest = body.evaluate({})
     candidates = regions.bone_weights(model, ("head", "neck")) > 0.5
-    style = hair.hair_style(rest, faces, candidates, style, 0.6 if kind == "child" else 1.0)
+    scale = 0.6 if kind == "child" else 1.0
+    style = hair.hair_style(rest, faces, candidates, style, scale)
+    shell = hair.hair_vertices(style, rest.vertices.astype(np.float64), hair.vertex_normals(rest.vertices, faces))
+    strands = hair.strand_roots(style, shell.astype(np.float64), rest, scale)
     uv = model.texture_coordinates[model.face_texture_coordinate_indices].cpu().numpy()
     return {"faces": faces, "uv": uv.reshape(-1, 2).astype(np.float32),
             "eye_uv": regions.eye_uv(model, uv).reshape(-1, 2),
@@ -154,7 +163,9 @@ def _topology(kind: str, style: str) -> dict:
             "hands": regions.bone_weights(model, ("wrist", "finger", "metacarpal")) > 0.5,
             "carriers": belt.carrier_mask(model),
             "hair_i": style.i, "hair_j": style.j, "hair_t": style.t, "hair_faces": style.faces,
-            "hair_thickness": style.thickness}
+            "hair_thickness": style.thickness, "strand_face": strands.face, "strand_bary": strands.bary,
+            "strand_length": strands.length, "strand_lift": strands.lift, "strand_crown": np.int32(strands.crown),
+            "strand_points": np.int32(hair.STRAND_POINTS)}
 
 
 def _surface_state(posed, topo: dict) -> dict:
@@ -163,7 +174,11 @@ def _surface_state(posed, topo: dict) -> dict:
     normals = hair.vertex_normals(vertices.astype(np.float64), topo["faces"])
     style = hair.HairStyle("", topo["hair_i"], topo["hair_j"], topo["hair_t"], topo["hair_faces"],
                            topo["hair_thickness"], topo["field_scalp"])
-    return {"vertices": vertices.astype(np.float32), "hair": hair.hair_vertices(style, vertices, normals),
+    shell = hair.hair_vertices(style, vertices, normals)
+    strands = hair.Strands(topo["strand_face"], topo["strand_bary"], topo["strand_length"], topo["strand_lift"],
+                           int(topo["strand_crown"]))
+    return {"vertices": vertices.astype(np.float32), "hair": shell,
+            "strands": hair.strand_points(strands, topo["hair_faces"], shell),
             "joints": np.array([posed.head(b) for b in JOINTS], np.float32)}
 
 
