@@ -139,16 +139,15 @@ def hair_vertices(style: HairStyle, vertices: np.ndarray, normals: np.ndarray) -
 # ---------------------------------------------------------------------- strands over the shell
 # locks per square metre of shell and their length range (m) per style: the buzz cut has none (its
 # few millimetres are the shell's texture)
-_STRANDS = {"short": (350_000.0, (0.018, 0.035)), "bob": (300_000.0, (0.025, 0.050)), "buzz": (0.0, (0.0, 0.0))}
+_STRANDS = {"short": (350_000.0, (0.018, 0.035)), "bob": (300_000.0, (0.040, 0.080)), "buzz": (0.0, (0.0, 0.0))}
 STRAND_POINTS = 4
-HEAD_RADIUS = 0.20     # a lock falls away from its tangent as on a head this round (m)
 
 
 @dataclass(frozen=True)
 class Strands:
     """Locks of hair rooted on the shell: each at barycentric ``bary`` in shell triangle ``face``, of
-    ``length`` (m) and ``lift`` (how far it stands off the shell at most, m); they flow from the crown
-    (shell vertex ``crown``) down and round the head."""
+    ``length`` (m) and ``lift`` (how far it stands off the shell, a share of its length); they flow from
+    the crown (shell vertex ``crown``) down and round the head."""
     face: np.ndarray
     bary: np.ndarray
     length: np.ndarray
@@ -180,7 +179,7 @@ def strand_roots(style: HairStyle, shell: np.ndarray, rest: Posed, scale: float 
     length = np.where(towards_face, np.clip(above, 0.002, None).clip(None, length), length)
     crown = int(np.argmax(shell[:, 2] + 0.4 * shell[:, 1]))          # top and back of the head
     return Strands(face.astype(np.int32), bary.astype(np.float32), length.astype(np.float32),
-                   rng.uniform(0.001, 0.0035, n).astype(np.float32) * scale, crown)
+                   rng.uniform(0.05, 0.25, n).astype(np.float32), crown)
 
 
 def strand_points(strands: Strands, shell_faces: np.ndarray, shell: np.ndarray) -> np.ndarray:
@@ -199,9 +198,8 @@ def strand_points(strands: Strands, shell_faces: np.ndarray, shell: np.ndarray) 
     step = (strands.length / (STRAND_POINTS - 1))[:, None]
     lift = strands.lift[:, None]
     points = [root - 0.0005 * normal]
-    for k, rise in enumerate((0.7, 1.2, 0.8)[:STRAND_POINTS - 1], start=1):
-        along = k * step                 # the lock lies on the head: it falls away from its tangent line
-        points.append(root + along * direction - normal * (along ** 2 / (2 * HEAD_RADIUS)) + rise * lift * normal)
+    for rise in (1.0, 0.4, -0.6)[:STRAND_POINTS - 1]:
+        points.append(points[-1] + step * (direction + rise * lift * normal))
     return np.stack(points, axis=1).astype(np.float32)
 
 
