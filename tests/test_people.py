@@ -225,28 +225,6 @@ def test_eyes_teeth_and_hair_styles_are_where_a_face_has_them(people, model):
     assert people_module.hair_style_of({"driver_hair_style": "BY_GENDER"}, "male") == "short"
 
 
-def test_locks_of_hair_grow_from_the_shell_and_leave_the_forehead_free(people):
-    """Short hair and the bob carry thousands of locks rooted on their shell (the buzz cut none); a lock
-    is as long as its style says, the same on every frame, and none on the face's side hangs below the
-    hairline's height over the eyes (no fringe the style does not have)."""
-    key = ("MALE", "H3", "W2", "HAPPY", "P3")
-    for kind, style, (lo, hi) in (("male", "short", (0.018, 0.035)), ("female", "bob", (0.040, 0.080))):
-        topology = _load(people.topology(kind, style))
-        state = _load(people.driver_state("FEMALE" if kind == "female" else "MALE", *key[1:], style))
-        strands = state["strands"]
-        assert len(strands) > 5000 and strands.shape[1:] == (4, 3)
-        assert lo - 1e-6 <= topology["strand_length"].max() <= hi + 1e-6
-        corners = state["hair"][topology["hair_faces"][topology["strand_face"]]]
-        on_shell = np.einsum("sk,skd->sd", topology["strand_bary"], corners)
-        assert np.linalg.norm(strands[:, 0] - on_shell, axis=1).max() < 0.001      # rooted in the shell
-        eyes = state["head_centre"] + np.array([0.07, 0.0, 0.01])            # seated.py's head centre
-        face_side = strands[:, 0, 0] > eyes[0] - 0.02                   # the cabin's +x: the front of the head
-        assert face_side.any() and strands[face_side, -1, 2].min() > eyes[2] + 0.02, style     # above the brows
-        again = _load(people.driver_state("FEMALE" if kind == "female" else "MALE", *key[1:], style))
-        np.testing.assert_array_equal(again["strands"], strands)
-    assert len(_load(people.topology("male", "buzz"))["strand_face"]) == 0
-
-
 def test_a_phone_position_with_a_malformed_finger_direction_is_refused_with_the_fix(tmp_path):
     from isu_validate.render.cabin import CabinRigError
     text = (Path(__file__).parents[1] / "rigs" / "cabins" / "default.toml").read_text()

@@ -16,7 +16,6 @@ from . import mesh as M
 from .people_look import Look
 
 BELT = (0.10, 0.10, 0.11)
-LOCK_RADIUS = (0.00022, 0.00008)     # a lock of hair's radius at its root and its tip (m)
 
 
 def _load(path: str) -> dict:
@@ -49,11 +48,6 @@ class Person:
         if state != self.state_path:
             data = self.state = _load(state)
             for part, index in self.maps.items():
-                if part == "strands":
-                    self.parts[part].data.position_data.foreach_set(
-                        "vector", np.ascontiguousarray(data["strands"], np.float32).ravel())
-                    self.parts[part].data.update_tag()
-                    continue
                 source = data["hair"] if part == "hair" else data["vertices"][index]
                 mesh = self.parts[part].data
                 mesh.vertices.foreach_set("co", np.ascontiguousarray(source, np.float32).ravel())
@@ -92,10 +86,6 @@ class Person:
                      np.zeros(len(topo["hair_faces"]), np.uint8), [hair_mat], None)
         self.parts["hair"] = self._object(f"{self.name}_hair", mesh, self.head_id)
         self.maps["hair"] = topo["hair_i"]    # only its length counts: the hair's vertices come whole
-        if len(topo["strand_face"]):
-            locks = _locks(f"{self.name}_strands", len(topo["strand_face"]), int(topo["strand_points"]), hair_mat)
-            self.parts["strands"] = self._object(f"{self.name}_strands", locks, self.head_id)
-            self.maps["strands"] = topo["strand_face"]
 
     def _object(self, name, mesh, pid):
         obj = bpy.data.objects.new(name, mesh)
@@ -105,18 +95,6 @@ class Person:
 
     def set_look(self, skin: str, hair: str, shirt: str | None = None) -> None:
         self.look.set(skin, hair, shirt)
-
-
-def _locks(name: str, n: int, points: int, material) -> bpy.types.Curves:
-    """Hair curves for ``n`` locks of ``points`` points, thinning from root to tip (LOCK_RADIUS); their
-    points are set per state."""
-    curves = bpy.data.hair_curves.new(name)
-    curves.add_curves([points] * n)
-    root, tip = LOCK_RADIUS
-    radius = curves.attributes.new("radius", "FLOAT", "POINT")
-    radius.data.foreach_set("value", np.tile(np.linspace(root, tip, points, dtype=np.float32), n))
-    curves.materials.append(material)
-    return curves
 
 
 def _mesh(name: str, n_vertices: int, triangles: np.ndarray, slots: np.ndarray, materials, uv_layers: dict | None):

@@ -149,10 +149,7 @@ def _topology(kind: str, style: str) -> dict:
         fields = regions.adult_fields(body, female=kind == "female")
     rest = body.evaluate({})
     candidates = regions.bone_weights(model, ("head", "neck")) > 0.5
-    scale = 0.6 if kind == "child" else 1.0
-    style = hair.hair_style(rest, faces, candidates, style, scale)
-    shell = hair.hair_vertices(style, rest.vertices.astype(np.float64), hair.vertex_normals(rest.vertices, faces))
-    strands = hair.strand_roots(style, shell.astype(np.float64), rest, scale)
+    style = hair.hair_style(rest, faces, candidates, style, 0.6 if kind == "child" else 1.0)
     uv = model.texture_coordinates[model.face_texture_coordinate_indices].cpu().numpy()
     return {"faces": faces, "uv": uv.reshape(-1, 2).astype(np.float32),
             "eye_uv": regions.eye_uv(model, uv).reshape(-1, 2),
@@ -163,9 +160,7 @@ def _topology(kind: str, style: str) -> dict:
             "hands": regions.bone_weights(model, ("wrist", "finger", "metacarpal")) > 0.5,
             "carriers": belt.carrier_mask(model),
             "hair_i": style.i, "hair_j": style.j, "hair_t": style.t, "hair_faces": style.faces,
-            "hair_thickness": style.thickness, "strand_face": strands.face, "strand_bary": strands.bary,
-            "strand_length": strands.length, "strand_lift": strands.lift, "strand_crown": np.int32(strands.crown),
-            "strand_points": np.int32(hair.STRAND_POINTS)}
+            "hair_thickness": style.thickness}
 
 
 def _surface_state(posed, topo: dict) -> dict:
@@ -174,11 +169,7 @@ def _surface_state(posed, topo: dict) -> dict:
     normals = hair.vertex_normals(vertices.astype(np.float64), topo["faces"])
     style = hair.HairStyle("", topo["hair_i"], topo["hair_j"], topo["hair_t"], topo["hair_faces"],
                            topo["hair_thickness"], topo["field_scalp"])
-    shell = hair.hair_vertices(style, vertices, normals)
-    strands = hair.Strands(topo["strand_face"], topo["strand_bary"], topo["strand_length"], topo["strand_lift"],
-                           int(topo["strand_crown"]))
-    return {"vertices": vertices.astype(np.float32), "hair": shell,
-            "strands": hair.strand_points(strands, topo["hair_faces"], shell),
+    return {"vertices": vertices.astype(np.float32), "hair": hair.hair_vertices(style, vertices, normals),
             "joints": np.array([posed.head(b) for b in JOINTS], np.float32)}
 
 
