@@ -90,13 +90,16 @@ def test_every_value_of_every_feature_changes_the_image(name, frames):
         space.check(scene)
     rendered = [frames(s) for s in scenes]
     ref_img, ref_seg, _ = rendered[0]
-    for scene, (img, seg, _) in zip(scenes[1:], rendered[1:]):
+    for scene, (img, seg, result) in zip(scenes[1:], rendered[1:]):
         changed = np.abs(img - ref_img).max(axis=2) > 12
         assert changed.sum() >= 8, f"{name}={scene[name]!r} looks like {name}={scenes[0][name]!r}"
         if name in AFFECTS:
             iid = INSTANCE_ID[AFFECTS[name]]
             moved = ((seg == iid) != (ref_seg == iid)).sum()
-            assert moved >= 8, f"{name}={scene[name]!r}: the {AFFECTS[name]} mask did not change ({moved} px)"
+            # a thing hidden from this camera (the phone at the left ear, behind the head) need not show,
+            # but then the renderer must say so: its feature is labelled occluded (never judged)
+            assert moved >= 8 or name in result.occluded, \
+                f"{name}={scene[name]!r}: the {AFFECTS[name]} mask did not change ({moved} px) and is not occluded"
         if name in REGION:
             ids = [INSTANCE_ID[part] for part in REGION[name]]
             inside = np.isin(seg, ids) | np.isin(ref_seg, ids)
