@@ -34,8 +34,6 @@ def see_through(name: str, colour, tint, opacity: float, roughness: float = 0.05
     return mat
 
 
-
-
 def seat_cover(name: str, colour, quilted: bool = True) -> bpy.types.Material:
     """A car seat's woven cover, in each box's own coordinates (-0.5..0.5 across, so it fits every seat
     part): a mottled tone; unless not ``quilted`` (a headrest), a darker middle insert between two
@@ -68,19 +66,13 @@ def seat_cover(name: str, colour, quilted: bool = True) -> bpy.types.Material:
     colour_out = N.multiply(nodes, links, insert, colour_out, (0.72, 0.72, 0.72))
     colour_out = N.multiply(nodes, links, seam, colour_out, (0.6, 0.6, 0.6))
     links.new(colour_out, bsdf.inputs["Base Color"])
-    bump = nodes.new("ShaderNodeBump")
-    bump.invert = True                                               # a seam is a groove
-    bump.inputs["Strength"].default_value = 0.5
-    links.new(seam, bump.inputs["Height"])
-    links.new(bump.outputs["Normal"], bsdf.inputs["Normal"])
+    links.new(N.bump(nodes, links, seam, 0.5, invert=True), bsdf.inputs["Normal"])     # a seam is a groove
     return mat
 
 
 def _groove(nodes, links, distance, half_width: float):
     """1 on a seam, falling linearly to 0 at ``half_width`` from it (in the box's own units)."""
     return N.math(nodes, links, "MULTIPLY_ADD", distance, -1.0 / half_width, 1.0, clamp=True)   # 1 - d / w
-
-
 
 
 def woven(name: str, colour, roughness: float = 0.9) -> bpy.types.Material:
@@ -94,9 +86,6 @@ def woven(name: str, colour, roughness: float = 0.9) -> bpy.types.Material:
     tone = N.multiply(nodes, links, N.noise(nodes, links, 12.0), colour, (1.35, 1.3, 1.3))
     links.new(tone, bsdf.inputs["Base Color"])
     # the cloth's lumpiness, coarse enough to resolve at 2 samples (a true weave is below a pixel)
-    bump = nodes.new("ShaderNodeBump")
-    bump.inputs["Strength"].default_value = 0.15
-    links.new(N.noise(nodes, links, 40.0, 1.0), bump.inputs["Height"])
-    links.new(bump.outputs["Normal"], bsdf.inputs["Normal"])
+    links.new(N.bump(nodes, links, N.noise(nodes, links, 40.0, 1.0), 0.15), bsdf.inputs["Normal"])
     mat["_isu_woven"] = True
     return mat

@@ -73,9 +73,11 @@ def value(nodes, number: float):
     return node.outputs[0]
 
 
-def bump(nodes, links, height, strength: float, distance_m: float):
-    """A normal bent by ``height`` (0..1) as a relief ``distance_m`` deep at ``strength``."""
+def bump(nodes, links, height, strength: float, distance_m: float = 0.001, invert: bool = False):
+    """A normal bent by ``height`` (0..1) as a relief ``distance_m`` deep at ``strength`` (``invert``:
+    high is a groove)."""
     node = nodes.new("ShaderNodeBump")
+    node.invert = invert
     node.inputs["Strength"].default_value = strength
     node.inputs["Distance"].default_value = distance_m
     _feed(links, node.inputs["Height"], height)

@@ -1,5 +1,5 @@
-"""Hands: the hand's frame from anny's bones, grips on the steering wheel's rim and on a phone, and the
-finger curl that closes a hand round what it holds.
+"""Hands: the hand's frame from anny's bones, and fingers closed round what the hand holds: wrapped
+round the steering wheel's rim (``wrap``), closed on a phone until they touch it (``close_on``).
 
 A hand frame is (a, t, p): ``a`` from the wrist to the middle knuckle, ``t`` across the knuckles from
 the little finger to the index, ``p`` the palm's normal (out of the palm)."""
@@ -41,28 +41,6 @@ def hand_frame(posed: Posed, side: str) -> HandFrame:
 def turn_to(frame: HandFrame, a_wanted, p_wanted) -> np.ndarray:
     """The world rotation taking a hand frame's long axis to ``a_wanted`` and palm to ``p_wanted``."""
     return align(frame.a, frame.p, np.asarray(a_wanted, float), np.asarray(p_wanted, float))
-
-
-def curl(side: str, G_hand: np.ndarray, frame_a, frame_t, frame_p, degrees: tuple[float, float, float],
-         thumb_degrees: float = 0.0) -> dict[str, np.ndarray]:
-    """Pose deltas that bend each finger's three joints by ``degrees`` towards the palm (world axes of the
-    turned hand: a, t, p after turning), and the thumb's last two joints by ``thumb_degrees``."""
-    axis = np.cross(frame_a, frame_p)        # rotating a about it moves it towards p
-    deltas = {}
-    for finger in FINGERS:
-        G = G_hand                           # the metacarpal follows the wrist
-        for joint, angle in zip((1, 2, 3), degrees):
-            Q = rotation(axis, np.radians(angle))
-            deltas[f"finger{finger}-{joint}.{side}"] = delta_for(G, Q)
-            G = Q @ G
-    if thumb_degrees:
-        G = G_hand
-        thumb_axis = np.cross(frame_t, frame_p) if side == "L" else -np.cross(frame_t, frame_p)
-        for joint in (1, 2, 3):
-            Q = rotation(thumb_axis, np.radians(thumb_degrees if joint > 1 else thumb_degrees / 2))
-            deltas[f"finger1-{joint}.{side}"] = delta_for(G, Q)
-            G = Q @ G
-    return deltas
 
 
 def _unit(v) -> np.ndarray:

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..cabin_geometry import PHONE_SIZE, RIM_TUBE, phone_box, rim_point, seat_boxes, wheel_frame
-from .hands import FINGERS, HandFrame, close_on, curl, hand_frame, turn_to, wrap
+from .hands import FINGERS, HandFrame, close_on, hand_frame, turn_to, wrap
 from .limbs import Limb, reach
 from .regions import bone_weights
 from .skeleton import Body, Posed, align, rigid, rot_x, rot_z, rotation
@@ -22,7 +22,6 @@ from .skeleton import Body, Posed, align, rigid, rot_x, rot_z, rotation
 GAP = 0.004              # clearance between the body and the seat it rests on (m)
 RECLINE_DEG = 14.0       # the torso leans back with the backrest (17 deg): a little upright of it
 GRIP_CLOCK = {"L": 150.0, "R": 30.0}   # ten and two: angles from three o'clock
-GRIP_CURL = (55.0, 60.0, 45.0)         # finger joints bent towards the rim before wrapping (degrees)
 PHONE_ALONG = 0.85                     # the phone's middle lies across the palm this far from wrist to knuckles
 PHONE_SHIFT = 0.03                     # ... and this far towards its top from the hand's middle (m)
 PALM_HALF = 0.014                      # from the hand's axis to the palm's surface (m)
@@ -178,14 +177,12 @@ def _head_centre(posed: Posed) -> np.ndarray:
 @dataclass
 class Grip:
     """Where a hand goes: a point on the hand's axis (``along`` its length from the wrist) to put at
-    ``palm_target``, the hand's wanted world rotation delta, its turned frame, the finger curl."""
+    ``palm_target``, the hand's wanted world rotation delta and its turned long axis; the fingers close
+    afterwards, on the posed hand (``wrap`` on the rim, ``close_on`` on the phone)."""
     palm_target: np.ndarray
     G_hand: np.ndarray
     a: np.ndarray
-    t: np.ndarray
-    p: np.ndarray
     along: float
-    fingers: tuple[float, float, float]
     on_wheel: bool
 
 
@@ -200,7 +197,7 @@ def _wheel_grip(rest: Posed, side: str, rig: dict) -> Grip:
     if p @ (-radial) < 0:                               # the palm faces the wheel's centre
         p = -p
     tube = rig["steering_wheel"]["radius"] * RIM_TUBE
-    return _grip(rest, side, a, p, point - p * (tube + GRIP_PALM), GRIP_ALONG, GRIP_CURL, True)
+    return _grip(rest, side, a, p, point - p * (tube + GRIP_PALM), GRIP_ALONG, True)
 
 
 def _phone_grip(rest: Posed, side: str, spec: dict, rig: dict, head_centre: np.ndarray) -> Grip:
@@ -216,23 +213,20 @@ def _phone_grip(rest: Posed, side: str, spec: dict, rig: dict, head_centre: np.n
     away = np.asarray(spec.get("fingers", centre - rest.head(f"upperarm01.{side}")), float)
     a = xp if xp @ away > 0 else -xp
     palm = centre - zp * (PHONE_THICKNESS / 2 + PALM_HALF) - yp * PHONE_SHIFT
-    return _grip(rest, side, a, zp, palm, PHONE_ALONG, (0.0, 0.0, 0.0), False)
+    return _grip(rest, side, a, zp, palm, PHONE_ALONG, False)
 
 
-def _grip(rest, side, a, p, palm_target, along, fingers, on_wheel) -> Grip:
+def _grip(rest, side, a, p, palm_target, along, on_wheel) -> Grip:
     frame = hand_frame(rest, side)
     Z = turn_to(frame, a, p)
-    return Grip(palm_target, Z @ rest.rot(f"wrist.{side}"), Z @ frame.a, Z @ frame.t, Z @ frame.p, along,
-                fingers, on_wheel)
+    return Grip(palm_target, Z @ rest.rot(f"wrist.{side}"), Z @ frame.a, along, on_wheel)
 
 
 def _arm(rest: Posed, side: str, grip: Grip) -> dict:
     wrist_target = grip.palm_target - grip.a * (grip.along * hand_frame(rest, side).length)
     outward = 1.0 if side == "L" else -1.0
     pole = np.array([-0.3, 0.7 * outward, -1.0])       # elbows down, a little out and back
-    deltas = reach(Limb.arm(side), rest, wrist_target, pole, end_rotation=grip.G_hand)
-    deltas.update(curl(side, grip.G_hand, grip.a, grip.t, grip.p, grip.fingers, thumb_degrees=20.0))
-    return deltas
+    return reach(Limb.arm(side), rest, wrist_target, pole, end_rotation=grip.G_hand)
 
 
 def _phone_in(frame: HandFrame, spec: dict, palm_skin: float) -> tuple[np.ndarray, np.ndarray]:
