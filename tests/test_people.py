@@ -129,6 +129,26 @@ def test_regions_dress_the_body_and_split_off_the_head(people, model):
     assert rest.vertices[female["hair_i"], 2].min() < rest.vertices[topology["hair_i"], 2].min() - 0.05
 
 
+def test_hair_has_no_slivers_and_short_hair_has_sideburns(people, model):
+    for kind, gender in (("female", "FEMALE"), ("male", "MALE")):
+        topology = _load(people.topology(kind))
+        state = _load(people.driver_state(gender, "H3", "W2", "HAPPY", "NONE"))
+        tri = state["hair"][topology["hair_faces"]].astype(np.float64)
+        area = np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1) / 2
+        assert area.min() > 1e-8, f"{kind}: a hair triangle of {area.min():.1e} m²"    # a cut's sliver
+    # sideburns: just in front of the ears short hair reaches 2 cm lower than a buzz cut does
+    rest = people_module.Body(model, people_module.driver_phenotype("MALE", "H3", "W2")).evaluate({})
+    v = rest.vertices.astype(np.float64)
+    eyes = (rest.head("eye.L") + rest.head("eye.R")) / 2
+    d = v - (eyes + np.array([0.0, 0.075, 0.0]))          # the head's middle; the body faces -Y at rest
+    cos_front = -d[:, 1] / np.hypot(d[:, 0], d[:, 1])
+    lowest = {}
+    for style in ("short", "buzz"):
+        hair = np.unique(_load(people.topology("male", style))["hair_i"])
+        lowest[style] = v[hair[(cos_front[hair] > 0.1) & (cos_front[hair] < 0.2)], 2].min()
+    assert lowest["short"] < lowest["buzz"] - 0.02
+
+
 def test_children_sit_in_their_seats_the_rear_facing_one_reclined(people):
     anchor = people.cabin["anchors"]["child_seat"]
     for front in (True, False):

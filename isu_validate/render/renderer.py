@@ -36,8 +36,9 @@ from .worker import BlenderWorker, WorkerCrashed, WorkerFailed, WorkerTimeout
 # bump when the scene content or the outputs change: it is part of every cache key
 # 2: driver_face part, footprints; 3: the phone, can and bottle lie on the co-driver seat; 4: anny people;
 # 5: the camera frames tall drivers' heads, P8 by the door in view, light tree off; 6: people and things
-# that read as real (issues 32, 33); 7: the phone gripped at P1-P10, upright at the ears, portrait when read
-RENDERER_VERSION = "isu-blender-7"
+# that read as real (issues 32, 33); 7: the phone gripped at P1-P10, upright at the ears, portrait when read;
+# 8: short hair fuller on top with sideburns, brows darker than the hair, GREY hair darker
+RENDERER_VERSION = "isu-blender-8"
 
 # what the worker shows for a feature the scene space does not have (or that is inactive)
 DEFAULTS = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height": "H2", "driver_weight": "W2",

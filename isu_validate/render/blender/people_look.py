@@ -22,10 +22,11 @@ def _linear(*srgb_8bit):
 SKIN_TONES = {"LIGHT": _linear(214, 170, 145), "MEDIUM": _linear(190, 135, 100),
               "BROWN": _linear(140, 90, 62), "DARK": _linear(80, 52, 38)}
 HAIR_COLOURS = {"BLACK": _linear(26, 22, 20), "BROWN": _linear(66, 44, 30), "BLONDE": _linear(176, 140, 94),
-                "RED": _linear(122, 54, 30), "GREY": _linear(156, 152, 148)}
+                "RED": _linear(122, 54, 30), "GREY": _linear(128, 126, 124)}
 # iris colour by hair colour (the commonest pairing; eyes are not a scene feature)
 IRIS = {"BLACK": _linear(48, 30, 20), "BROWN": _linear(70, 44, 26), "BLONDE": _linear(80, 110, 140),
         "RED": _linear(86, 96, 60), "GREY": _linear(96, 108, 120)}
+BROW_DARK, BROW_DARKENING = _linear(34, 24, 18), 0.6
 SHIRT = {"BLACK": (0.012, 0.012, 0.013), "WHITE": (0.80, 0.80, 0.78)}
 SCLERA = _linear(226, 216, 208)
 TEETH = _linear(214, 204, 184)
@@ -97,8 +98,12 @@ def _body_material(name: str, lips_mask: str) -> bpy.types.Material:
     hair_shaded = N.mix(nodes, links, strands, N.multiply(nodes, links, 1.0, hair, (0.8, 0.8, 0.8)),
                        N.multiply(nodes, links, 1.0, hair, (1.2, 1.2, 1.2)))
     # brows: dense in the middle, thinning over the last 1.5 mm, broken up by strands; darker than the hair
+    # and part of the way to a dark brown, as brows are (grey or blond hair's brows painted in the hair's
+    # own colour read as white bars on a dark face)
     brows = _soft(nodes, links, "brows", 0.0015, strands, 0.95)
-    colour = N.mix(nodes, links, brows, colour, N.multiply(nodes, links, 1.0, hair_shaded, (0.7, 0.7, 0.7)))
+    brow_colour = N.mix(nodes, links, BROW_DARKENING, N.multiply(nodes, links, 1.0, hair_shaded, (0.7, 0.7, 0.7)),
+                        BROW_DARK)
+    colour = N.mix(nodes, links, brows, colour, brow_colour)
     scalp = _soft(nodes, links, "scalp", 0.002, strands, 1.0)
     colour = N.mix(nodes, links, scalp, colour, hair_shaded)
     rough = N.mix(nodes, links, scalp, rough, N.value(nodes, 0.45), "FLOAT")

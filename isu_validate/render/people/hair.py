@@ -3,12 +3,13 @@
 anny ships no hair. A style is a set of scalp vertices (chosen on the standing rest body by a hairline
 that runs round the head) and a thickness per vertex; the shell's triangles are anny's own between
 those vertices, so the hair follows every pose and face without a separate rig. Short hair (men, the
-child) stays close to the head and ends at the ears and the nape; the women's bob covers the ears and
+child) stays close to the head, fuller on top, with sideburns, and ends above the ears and at the nape; the
+women's bob covers the ears and
 the nape and flares out towards its lower edge, so hair length differs by gender while the bodies and
 faces differ too (hair is not the only cue)."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -17,7 +18,8 @@ from .skeleton import Posed
 # hairline height above the eyes (share of a 1.75 m adult's size) against the cosine of the angle
 # from the face's direction round the head: 1 = the forehead, 0 = above the ears, -1 = the nape
 _HAIRLINES = {
-    "short": ((-1.0, -0.060), (0.0, 0.012), (0.35, 0.022), (1.0, 0.052)),
+    # short: sideburns in front of the ears (the hairline dips by the temples)
+    "short": ((-1.0, -0.060), (0.0, 0.012), (0.08, -0.030), (0.2, -0.030), (0.3, 0.022), (1.0, 0.052)),
     "bob": ((-1.0, -0.170), (-0.3, -0.125), (0.2, -0.095), (0.45, 0.020), (1.0, 0.045)),
     "buzz": ((-1.0, -0.050), (0.0, 0.015), (0.35, 0.026), (1.0, 0.058)),
 }
@@ -61,13 +63,22 @@ def hair_style(rest: Posed, faces: np.ndarray, candidates: np.ndarray, name: str
         taper = np.where(cos_front > 0.3, taper, 1.0)
     elif name == "buzz":       # clipped a few millimetres long: the scalp's shape shows through
         base = np.full(len(v), 0.0025)
-    else:
-        base = np.full(len(v), 0.007)
+    else:                      # short: fuller on top than at the sides
+        base = 0.006 + 0.008 * np.clip((v[:, 2] - eyes[2]) / (0.12 * s), 0.0, 1.0)
     thickness = base * s * taper * scale_thickness * _clumps(d / s)
     edge = np.where(candidates, above - PAINTED, -1.0)            # > 0 under the shell
     i, j, t, shell = _clip(faces, edge)
-    return HairStyle(name, i, j, t, shell, ((1 - t) * thickness[i] + t * thickness[j]).astype(np.float32),
-                     np.where(candidates, above * s, -1.0).astype(np.float32))
+    thickness = ((1 - t) * thickness[i] + t * thickness[j]).astype(np.float32)
+    style = HairStyle(name, i, j, t, shell, thickness, np.where(candidates, above * s, -1.0).astype(np.float32))
+    return _without_slivers(style, v, faces)
+
+
+def _without_slivers(style: HairStyle, v: np.ndarray, faces: np.ndarray) -> HairStyle:
+    """The style without triangles under 0.1 mm² at rest: a cut through (almost) a vertex leaves slivers
+    that no pixel shows but that give degenerate normals."""
+    tri = hair_vertices(style, v, vertex_normals(v, faces))[style.faces].astype(np.float64)
+    area = np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1) / 2
+    return replace(style, faces=style.faces[area > 1e-7])
 
 
 def _clumps(d: np.ndarray) -> np.ndarray:
