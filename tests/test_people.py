@@ -137,11 +137,9 @@ def test_hair_has_no_slivers_and_short_hair_has_sideburns(people, model):
         area = np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1) / 2
         assert area.min() > 1e-8, f"{kind}: a hair triangle of {area.min():.1e} m²"    # a cut's sliver
     # sideburns: just in front of the ears short hair reaches 2 cm lower than a buzz cut does
+    from isu_validate.render.people.hair import head_frame
     rest = people_module.Body(model, people_module.driver_phenotype("MALE", "H3", "W2")).evaluate({})
-    v = rest.vertices.astype(np.float64)
-    eyes = (rest.head("eye.L") + rest.head("eye.R")) / 2
-    d = v - (eyes + np.array([0.0, 0.075, 0.0]))          # the head's middle; the body faces -Y at rest
-    cos_front = -d[:, 1] / np.hypot(d[:, 0], d[:, 1])
+    v, cos_front = rest.vertices.astype(np.float64), head_frame(rest).cos_front
     lowest = {}
     for style in ("short", "buzz"):
         hair = np.unique(_load(people.topology("male", style))["hair_i"])

@@ -3,10 +3,9 @@
 anny ships no hair. A style is a set of scalp vertices (chosen on the standing rest body by a hairline
 that runs round the head) and a thickness per vertex; the shell's triangles are anny's own between
 those vertices, so the hair follows every pose and face without a separate rig. Short hair (men, the
-child) stays close to the head, fuller on top, with sideburns, and ends above the ears and at the nape; the
-women's bob covers the ears and
-the nape and flares out towards its lower edge, so hair length differs by gender while the bodies and
-faces differ too (hair is not the only cue)."""
+child) stays close to the head, fuller on top, with sideburns, and ends above the ears and at the nape;
+the women's bob covers the ears and the nape and flares out towards its lower edge, so hair length
+differs by gender while the bodies and faces differ too (hair is not the only cue)."""
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
@@ -42,17 +41,33 @@ class HairStyle:
     field: np.ndarray        # per anny vertex: height above the hairline (m), > 0 on the scalp
 
 
-def hair_style(rest: Posed, faces: np.ndarray, candidates: np.ndarray, name: str, scale_thickness: float = 1.0
-               ) -> HairStyle:
-    """The style ``name`` ("short" or "bob") on a rest body; ``candidates`` marks vertices that may
-    carry hair (head and neck). The shell is cut exactly along its edge line (not along anny's
-    triangles), a little inside the painted hairline, so its rim is as smooth as the hairline."""
+@dataclass(frozen=True)
+class HeadFrame:
+    """Where a rest body's head is: the eyes' midpoint, the body's size against a 1.75 m adult, and per
+    vertex its offset from the head's middle and the cosine of its bearing round the head from the
+    face's direction (1 the forehead, 0 above the ears, -1 the nape)."""
+    eyes: np.ndarray
+    size: float
+    offset: np.ndarray
+    cos_front: np.ndarray
+
+
+def head_frame(rest: Posed) -> HeadFrame:
     v = rest.vertices.astype(np.float64)
     eyes = (rest.head("eye.L") + rest.head("eye.R")) / 2
     s = (eyes[2] - rest.head("root")[2]) / 0.69
-    centre = eyes + np.array([0.0, 0.075 * s, 0.0])     # the body faces -Y at rest
-    d = v - centre
-    cos_front = -d[:, 1] / np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-9)
+    d = v - (eyes + np.array([0.0, 0.075 * s, 0.0]))      # the head's middle; the body faces -Y at rest
+    return HeadFrame(eyes, s, d, -d[:, 1] / np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-9))
+
+
+def hair_style(rest: Posed, faces: np.ndarray, candidates: np.ndarray, name: str, scale_thickness: float = 1.0
+               ) -> HairStyle:
+    """The style ``name`` (one of STYLES) on a rest body; ``candidates`` marks vertices that may carry
+    hair (head and neck). The shell is cut exactly along its edge line (not along anny's triangles), a
+    little inside the painted hairline, so its rim is as smooth as the hairline."""
+    v = rest.vertices.astype(np.float64)
+    head = head_frame(rest)
+    eyes, s, d, cos_front = head.eyes, head.size, head.offset, head.cos_front
     knots = np.array(_HAIRLINES[name])
     hairline = eyes[2] + s * np.interp(cos_front, knots[:, 0], knots[:, 1])
     above = (v[:, 2] - hairline) / s
