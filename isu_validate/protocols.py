@@ -29,6 +29,7 @@ class RenderResult:
     cached: bool = False
     visibility: dict[str, float] = field(default_factory=dict)  # feature -> visible share (things that exist)
     occluded: list[str] = field(default_factory=list)           # features seen too little to be judged
+    up: dict[str, list[float]] = field(default_factory=dict)    # instance -> where its top points (object_axes)
 
 
 class Renderer(Protocol):

@@ -13,6 +13,7 @@ from isu_validate.devices import resolve_torch_device
 from isu_validate.errors import InputError
 from isu_validate.recognition import photos
 from isu_validate.recognition.expression import HAPPY, LABELS
+from isu_validate.recognition.objects import square_crop, upright_crop
 from isu_validate.recognition.read import Yardsticks
 from isu_validate.recognition.tally import auc, wilson
 from isu_validate.yardstick import measure
@@ -90,6 +91,35 @@ def test_imagenet_reads_a_real_cup_as_espresso(models):
     reads = photos.cup(models)
     assert [r["top1"] for r in reads] == ["espresso"] * 3
     assert all(r["cup_in_top5"] for r in reads[:2])
+
+
+def _cup_on_its_side():
+    """scikit-image's coffee photograph turned a quarter clockwise: the cup's top now points right."""
+    x0, y0, x1, y1 = photos.CUP_BOX
+    height = data.coffee().shape[0]
+    return np.ascontiguousarray(np.rot90(data.coffee(), -1)), (height - y1, x0, height - y0, x1)
+
+
+def test_a_real_cup_on_its_side_reads_surely_again_once_turned_upright(models):
+    side, box = _cup_on_its_side()
+    as_seen, upright = models.objects.top([square_crop(side, box), upright_crop(side, box, (1.0, 0.0))])
+    assert upright[0][0] == "espresso" and upright[0][1] > 0.8     # as the photograph stands (0.94)
+    assert as_seen[0][1] < 0.5                                       # lying: 0.35, "coffee mug" close behind
+
+
+def test_upright_crop_turns_the_things_top_up_and_keeps_an_upright_one_as_it_is():
+    bar = np.zeros((100, 100, 3), np.uint8)
+    bar[45:55, 30:70] = 100
+    bar[45:55, 62:70] = 255                                  # the bar's top: its bright right end
+    as_seen = square_crop(bar, (30, 45, 70, 55))
+    for up, top_row in (((1.0, 0.0), True), ((0.8, 0.6), True), ((-1.0, 0.0), False), ((-0.7, -0.6), False)):
+        crop = upright_crop(bar, (30, 45, 70, 55), up)
+        ys, xs = np.nonzero(crop[..., 0] == 255)
+        assert crop.shape == (50, 50, 3) and abs(xs.mean() - 24.5) < 1.5      # on the crop's middle line
+        assert (ys.mean() < 15) == top_row and (ys.mean() > 35) != top_row
+        assert sorted(crop.ravel().tolist()) == sorted(as_seen.ravel().tolist())   # its pixels, turned
+    for up in ((0.0, -1.0), (0.6, -0.8), (-0.6, -0.8)):      # within 45 degrees of upright: as it is
+        assert np.array_equal(upright_crop(bar, (30, 45, 70, 55), up), as_seen)
 
 
 def test_wilson_interval_and_auc_known_values():
@@ -188,8 +218,31 @@ def test_pairs_real_frames_beside_the_renders_and_stand_ins_marked(tmp_path, sha
     assert "STAND-IN FRAMES: 1 of 2" in html and "<th>render</th><th>real</th><th>stand-in</th>" in html
 
 
+def test_a_thing_is_read_upright_where_its_label_says_where_its_top_points(tmp_path, shared_models):
+    side, (x0, y0, x1, y1) = _cup_on_its_side()
+    things = {"driver_face": {"bbox": HEAD}, "colabottle_codriver_seat": {"bbox": [x0, y0, x1 - 1, y1 - 1]}}
+    frame(tmp_path / "frames", "told", side, {**label(visible=things, colabottle_codriver_seat="YES"),
+                                              "up": {"colabottle_codriver_seat": [1.0, 0.0]}})
+    frame(tmp_path / "frames", "untold", side, label(visible=things, colabottle_codriver_seat="YES"))
+    summary = run([tmp_path / "frames"], tmp_path / "out")
+    records = {r["name"]: r for r in map(json.loads, (tmp_path / "out" / "frames.jsonl").read_text().splitlines())}
+    told, untold = (next(i for i in records[n]["items"] if i["feature"] == "bottle") for n in ("told", "untold"))
+    assert told["up"] == [1.0, 0.0] and told["upright"]["top"][0][0] == "espresso"   # a cup, not a bottle
+    assert "up" not in untold and "upright" not in untold    # a label from before `up`: read as seen only
+    assert row(summary, "bottle top-5")["n"] == 2 and row(summary, "bottle top-5 upright")["n"] == 1
+    assert summary["objects"]["render"]["bottle"]["upright"]["n"] == 1
+
+
 def test_the_report_escapes_what_it_shows(tmp_path, shared_models):
     frame(tmp_path / "frames", "astronaut", data.astronaut(), label(emotion="<b>HAPPY</b>"))
     run([tmp_path / "frames"], tmp_path / "out")
     html = (tmp_path / "out" / "index.html").read_text()
     assert "<b>HAPPY</b>" not in html and "&lt;b&gt;HAPPY&lt;/b&gt;" in html
+
+
+@pytest.mark.parametrize("up", [[0.0, 0.0], "up", [1.0], {"x": 1}])
+def test_a_malformed_up_in_a_label_names_the_frame(tmp_path, up):
+    frame(tmp_path / "frames", "bad", np.zeros((60, 80, 3), np.uint8), {**label(), "up": {"phone": up}})
+    with pytest.raises(InputError, match=r"label of .*bad\.png has a malformed 'up'"):
+        run([tmp_path / "frames"], tmp_path / "out")
+    assert not (tmp_path / "out" / "frames.jsonl").exists()

@@ -4,6 +4,7 @@ Every feature of the isu-paper space must visibly change the image, and the segm
 object it concerns; the cache, crash recovery and the camera rig's geometry are checked too."""
 from __future__ import annotations
 
+import json
 import os
 import signal
 import sys
@@ -113,11 +114,12 @@ def test_every_value_of_every_feature_changes_the_image(name, frames):
                     f"phone positions {scenes[i][name]} and {scenes[j][name]} look the same"
 
 
+EVERYTHING = {**BASE, **{f: "YES" for f in CODRIVER_SEAT}, "phone_position": "P5", "luggage": "YES",
+              "luggage_orientation": 90.0, "luggage_position": "BACK", "luggage_colour": "YELLOW", "seat_belt": "YES"}
+
+
 def test_present_objects_are_visible_and_absent_ones_are_not(frames):
-    everything = {**BASE, **{f: "YES" for f in CODRIVER_SEAT}, "phone_position": "P5", "luggage": "YES",
-                  "luggage_orientation": 90.0, "luggage_position": "BACK", "luggage_colour": "YELLOW",
-                  "seat_belt": "YES"}
-    _, seg, result = frames(everything)
+    _, seg, result = frames(EVERYTHING)
     for thing in ("driver", "seat_belt", "phone", *CODRIVER_SEAT, "luggage"):
         assert (seg == INSTANCE_ID[thing]).sum() >= 10, f"{thing} is (almost) invisible"
     # a child seat (with its child) takes the co-driver seat, so it is seen in a scene of its own
@@ -130,6 +132,19 @@ def test_present_objects_are_visible_and_absent_ones_are_not(frames):
     assert set(result.timings) >= {"update_s", "render_s", "write_s", "total_s"}
     depth = cv2.imread(str(result.channels["depth"]), cv2.IMREAD_UNCHANGED)
     assert depth.dtype == np.uint16 and 200 < np.median(depth[depth > 0]) < 3000   # millimetres in a cabin
+
+
+def test_the_label_says_where_the_bottles_cap_points_as_its_pixels_do(renderer, frames):
+    """The bottle lies with its base at the rig's position: its pixels run from that point (projected)
+    towards the cap, which is where the label's ``up`` must point (the Euler angles read as Blender does)."""
+    _, seg, result = frames(EVERYTHING)
+    assert set(result.up) == set(CODRIVER_SEAT)
+    ys, xs = np.nonzero(seg == INSTANCE_ID["colabottle_codriver_seat"])
+    base = renderer.render_rig.project(renderer.cabin["codriver_seat"]["colabottle_codriver_seat"]["position"])[0]
+    towards = np.array([xs.mean(), ys.mean()]) - base
+    assert towards @ result.up["colabottle_codriver_seat"] > 0.97 * np.linalg.norm(towards)
+    assert result.up["colacan_codriver_seat"][1] < -0.8                  # a standing can's top is up the frame
+    assert json.loads(result.channels["label"].read_text())["up"] == result.up
 
 
 def test_the_codriver_seat_objects_lie_on_the_cushion_apart_from_each_other(renderer, tmp_path):

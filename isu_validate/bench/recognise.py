@@ -13,7 +13,8 @@ from pathlib import Path
 from isu_validate.devices import add_device_argument
 
 # the measures the table shows (all of them are in each OUT/<preset>-recognise/summary.json)
-COLUMNS = ("face found", "HAPPY read happy", "SERIOUS read not happy", "phone top-5", "bottle top-5")
+COLUMNS = ("face found", "HAPPY read happy", "SERIOUS read not happy", "phone top-5", "bottle top-5",
+           "bottle top-5 upright")
 
 
 def register_bench(sub) -> None:

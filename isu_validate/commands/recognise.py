@@ -73,11 +73,18 @@ def format_footer(summary: dict) -> list[str]:
 
 def _object_reads(summary: dict) -> list[str]:
     """Which plausible class made each top-5 hit, and the commonest top-1 reads: a rate carried by one loose
-    class (a slab read as a "hand-held computer") must be visible as such."""
+    class (a slab read as a "hand-held computer") must be visible as such. The same for the things turned
+    upright."""
     lines = []
     for kind, objects in summary["objects"].items():
         for name, o in objects.items():
-            hits = ", ".join(f"{c} {n}" for c, n in o["top5_hits_by_class"].items()) or "none"
-            top1 = ", ".join(f"{c} {n}" for c, n in list(o["top1"].items())[:3])
-            lines.append(f"{name} ({kind}, n {o['n']}): top-5 hits by class: {hits}; commonest top-1: {top1}")
+            lines.append(_reads(f"{name} ({kind}, n {o['n']})", o))
+            if "upright" in o:
+                lines.append(_reads(f"{name} turned upright ({kind}, n {o['upright']['n']})", o["upright"]))
     return lines
+
+
+def _reads(title: str, o: dict) -> str:
+    hits = ", ".join(f"{c} {n}" for c, n in o["top5_hits_by_class"].items()) or "none"
+    top1 = ", ".join(f"{c} {n}" for c, n in list(o["top1"].items())[:3])
+    return f"{title}: top-5 hits by class: {hits}; commonest top-1: {top1}"

@@ -103,7 +103,7 @@ class ImageMaker:
                           "style_method": spec.method})
         return {**entry, "status": "ok", "files": files, "width": int(ids.shape[1]), "height": int(ids.shape[0]),
                 "visibility": dict(result.visibility), "occluded": list(result.occluded),
-                "annotations": instance_annotations(ids),
+                "annotations": instance_annotations(ids), "up": dict(result.up),
                 "timings": {"render_s": round(render_s, 4), "style_s": [round(s, 3) for s in style_s],
                             # CPU seconds: Blender's worker, and this process (posing, outputs, masks, styles)
                             "worker_cpu_s": result.timings.get("worker_cpu_s"),

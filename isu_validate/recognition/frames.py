@@ -46,6 +46,7 @@ class Frame:
     occluded: frozenset = frozenset()               # scene features the frame shows too little of
     own_boxes: bool = True          # False: the boxes are the aligned sim frame's (a real photograph)
     boxes_size: tuple[int, int] | None = None       # (w, h) of the image the boxes were measured on
+    up: dict = field(default_factory=dict)          # instance -> (dx, dy): where its top points (a unit vector)
 
     def boxes_for(self, width: int, height: int) -> dict:
         """The boxes in a (width x height) image: a real frame may be shot larger than the sim frame."""
@@ -54,6 +55,13 @@ class Frame:
         sx, sy = width / self.boxes_size[0], height / self.boxes_size[1]
         return {k: (round(b[0] * sx), round(b[1] * sy), round(b[2] * sx), round(b[3] * sy))
                 for k, b in self.boxes.items()}
+
+    def up_for(self, width: int, height: int) -> dict:
+        """Where each thing's top points in a (width x height) image (a frame shot at another aspect)."""
+        if not self.boxes_size or tuple(self.boxes_size) == (width, height):
+            return dict(self.up)
+        sx, sy = width / self.boxes_size[0], height / self.boxes_size[1]
+        return {k: _unit(u[0] * sx, u[1] * sy) for k, u in self.up.items()}
 
     def light(self) -> dict[str, str]:
         return {f: str(self.scene.get(f, "?")) for f in LIGHTS}
@@ -68,6 +76,11 @@ class Frame:
             hidden = unit.feature in self.occluded or unit.instance not in self.boxes
             out.append((unit, "occluded" if hidden else "visible"))
         return out
+
+
+def _unit(x: float, y: float) -> tuple[float, float]:
+    n = float(np.hypot(x, y))
+    return (x / n, y / n) if n > 0 else (0.0, -1.0)
 
 
 def read_image(path: Path) -> np.ndarray:

@@ -1,5 +1,6 @@
 """Objects: the ImageNet-1k head of the EfficientNet-Lite0 the reference ISU already ships (trained on
-ImageNet photographs), read on a crop around each object's render mask.
+ImageNet photographs), read on a crop around each object's render mask: as the camera sees it, and, where
+the render label says where the thing's top points, a second time turned upright (``upright_crop``).
 
 ImageNet has no "smartphone" or "cola bottle"; ``PLAUSIBLE`` names, per object, the classes a
 photo-trained classifier gives the real thing (docs/MODELS.md says why each is there). The cola can has
@@ -37,6 +38,15 @@ def square_crop(rgb: np.ndarray, box: tuple[int, int, int, int]) -> np.ndarray:
     x0 = int(min(max(0, round(cx - side / 2)), w - side))
     y0 = int(min(max(0, round(cy - side / 2)), h - side))
     return rgb[y0:y0 + side, x0:x0 + side]
+
+
+def upright_crop(rgb: np.ndarray, box: tuple[int, int, int, int], up: tuple[float, float]) -> np.ndarray:
+    """The square crop around ``box`` turned by the quarter turn that brings the thing's top (``up``, an image
+    direction, x right, y down) nearest to the frame's up: a bottle lying across a seat is read standing, as
+    photographs show bottles. Quarter turns keep the camera's pixels as they are (no resampling, nothing made
+    up beyond the frame's edge); within 45 degrees of upright is how photographs show things anyway."""
+    bearing = np.degrees(np.arctan2(-up[1], up[0]))          # of the top, counter-clockwise from "right"
+    return np.ascontiguousarray(np.rot90(square_crop(rgb, box), int(np.round((90.0 - bearing) / 90.0)) % 4))
 
 
 class ObjectRecogniser:

@@ -8,7 +8,7 @@ import numpy as np
 from .expression import HAPPY, LABELS, ExpressionReader
 from .faces import FaceDetector, match
 from .frames import Frame, read_image
-from .objects import ObjectRecogniser, hits, square_crop
+from .objects import ObjectRecogniser, hits, square_crop, upright_crop
 
 
 @dataclass
@@ -30,6 +30,7 @@ def read_frame(frame: Frame, models: Yardsticks) -> tuple[dict, list[tuple[np.nd
     """The frame's record (``frames.jsonl``) and its (crop, caption) pairs for the contact sheet."""
     rgb = read_image(frame.image)
     boxes = frame.boxes_for(rgb.shape[1], rgb.shape[0])
+    ups = frame.up_for(rgb.shape[1], rgb.shape[0])
     record = {"name": frame.name, "image": str(frame.image), "kind": frame.kind, "preset": frame.preset,
               **frame.light(), "size": [int(rgb.shape[1]), int(rgb.shape[0])], "own_boxes": frame.own_boxes,
               "items": []}
@@ -40,6 +41,8 @@ def read_frame(frame: Frame, models: Yardsticks) -> tuple[dict, list[tuple[np.nd
     for unit, status in frame.units():
         item = {"feature": unit.name, "instance": unit.instance, "status": status,
                 "box": list(boxes[unit.instance]) if unit.instance in boxes else None}
+        if unit.instance in ups:
+            item["up"] = [round(float(v), 4) for v in ups[unit.instance]]
         if unit.name == "face":
             item["emotion"] = frame.scene.get("driver_emotion")
         record["items"].append(item)
@@ -77,12 +80,22 @@ def _face(item: dict, frame: Frame, rgb: np.ndarray, faces, models: Yardsticks):
 
 
 def _objects(items: list[dict], rgb: np.ndarray, models: Yardsticks):
+    """Each thing read as seen and, where its label says where its top points, turned upright too
+    (``item["upright"]``): the classifier's view of the thing, apart from the pose it lies in."""
     crops = [square_crop(rgb, tuple(item["box"])) for item in items]
+    turned = [i for i, item in enumerate(items) if "up" in item]
+    upright = [upright_crop(rgb, tuple(items[i]["box"]), tuple(items[i]["up"])) for i in turned]
+    reads = models.objects.top(crops + upright)
     out = []
-    for item, crop, top in zip(items, crops, models.objects.top(crops), strict=True):
+    for item, crop, top in zip(items, crops, reads[:len(items)], strict=True):
         top1, top5 = hits(item["feature"], top)
         item.update(top=[[c, round(p, 4)] for c, p in top], top1=top1, top5=top5, crop_px=int(crop.shape[0]))
         out.append((crop, f"{item['feature']}: {top[0][0]}{' (top-5 hit)' if top5 else ''}"))
+    for i, crop, top in zip(turned, upright, reads[len(items):], strict=True):
+        item = items[i]
+        top1, top5 = hits(item["feature"], top)
+        item["upright"] = {"top": [[c, round(p, 4)] for c, p in top], "top1": top1, "top5": top5}
+        out.append((crop, f"{item['feature']} upright: {top[0][0]}{' (top-5 hit)' if top5 else ''}"))
     return out
 
 

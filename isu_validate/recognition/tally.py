@@ -43,6 +43,9 @@ MEASURES = {
     "phone top-5": (_is("phone"), lambda it: it["top5"]),
     "bottle top-1": (_is("bottle"), lambda it: it["top1"]),
     "bottle top-5": (_is("bottle"), lambda it: it["top5"]),
+    # the same things turned upright (where the render label says where their top points)
+    "phone top-5 upright": (_is("phone"), lambda it: it["upright"]["top5"] if "upright" in it else None),
+    "bottle top-5 upright": (_is("bottle"), lambda it: it["upright"]["top5"] if "upright" in it else None),
 }
 FEATURE = {m: m.split()[0] if m.split()[0] in ("phone", "bottle") else "face" for m in MEASURES}
 SPLITS = ("preset", *LIGHTS, "light")
@@ -63,6 +66,8 @@ def rows(records: list[dict]) -> list[dict]:
                 if not applies(item):
                     continue
                 h = None if item["status"] == "occluded" else hit(item)
+                if h is None and item["status"] != "occluded":   # visible but not read this way: no row
+                    continue
                 for split, value in _groups(record):
                     c = counts[(measure, record["kind"], split, value)]
                     if item["status"] == "occluded":
@@ -150,4 +155,9 @@ def object_summary(records: list[dict]) -> dict:
                     "n": len(items),
                     "top1": dict(Counter(i["top"][0][0] for i in items).most_common(10)),
                     "top5_hits_by_class": dict(Counter(c for i in items for c, _ in i["top"] if c in plausible))}
+                upright = [i["upright"] for i in items if "upright" in i]
+                if upright:
+                    out[kind][obj]["upright"] = {
+                        "n": len(upright), "top1": dict(Counter(u["top"][0][0] for u in upright).most_common(10)),
+                        "top5_hits_by_class": dict(Counter(c for u in upright for c, _ in u["top"] if c in plausible))}
     return dict(out)

@@ -25,6 +25,7 @@ from .cabin import cabin_hash, load_cabin
 from .cache import RenderCache
 from .camera import pinhole_plan
 from .frame_check import frame_problem, frame_stats
+from .object_axes import seat_objects_up
 from .gpu import device_identity, resolve_render_device
 from .outputs import channel_paths, footprint_pixels, parse_channels, write_outputs
 from .people import People, PeopleStore
@@ -108,15 +109,16 @@ class BlenderRenderer:
         frame = frame_stats(out)
         problem = frame_problem(frame, visible, driver_expected=self.show_people)
         label = channel_paths(out)["label"]
+        up = seat_objects_up(self.cabin, self.render_rig, list(visible))
         self._write_label(label, canonical, key, cached, timings, {
-            "visible": visible, "parts": parts, "frame": frame, "frame_problem": problem,
+            "visible": visible, "parts": parts, "up": up, "frame": frame, "frame_problem": problem,
             "visibility": shares, "occluded": occluded, "min_visible": self.min_visible,
             **({"imaging": {"model": self.imaging.hash, "exposure": developed.get("exposure")}}
                if self.imaging is not None else {})})
         if problem:
             raise RenderError(f"unusable frame: {problem}", image=out)
         return RenderResult(out, {**paths, "label": label}, timings, cached=cached, visibility=shares,
-                            occluded=occluded)
+                            occluded=occluded, up=up)
 
     def _frame(self, canonical: dict, out: Path, developed: dict):
         """(files by channel, visible instances, part shares, timings, cached, cache key): from the cache

@@ -7,6 +7,7 @@ aligned to the sim frame), and their face is any face the detector finds (alignm
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 from capture.sidecar import is_stand_in
@@ -40,11 +41,24 @@ def frames_of(source: Path) -> tuple[str, list[Frame]]:
 
 
 def _label_frame(image: Path, label: dict, name: str, kind: str = "render") -> Frame:
-    """A frame described by a render label: its scene, preset, visible boxes (inclusive ends in the label)."""
+    """A frame described by a render label: its scene, preset, visible boxes (inclusive ends in the label) and
+    where the placed things' tops point (labels before ``up`` was written have none)."""
     boxes = {n: (b[0], b[1], b[2] + 1, b[3] + 1) for n, v in (label.get("visible") or {}).items()
              if (b := v.get("bbox"))}
     return Frame(image, name, kind, label.get("preset"), dict(label.get("scene") or {}), boxes,
-                 frozenset(label.get("occluded") or ()))
+                 frozenset(label.get("occluded") or ()), up=_ups(label.get("up"), image))
+
+
+def _ups(raw, image: Path) -> dict:
+    """{instance: (dx, dy)} of a label's ``up``, each a unit vector; a malformed one names the frame."""
+    try:
+        ups = {str(k): (float(v[0]), float(v[1])) for k, v in (raw or {}).items()}
+    except (AttributeError, TypeError, ValueError, IndexError, KeyError):
+        ups = None
+    if ups is None or any(not 0.99 < math.hypot(*u) < 1.01 for u in ups.values()):
+        raise InputError(f"the label of {image} has a malformed 'up' ({raw!r}): it maps things to unit vectors "
+                         "[dx, dy]; render the frame again (`isu-validate render` writes it) or remove 'up'")
+    return ups
 
 
 def _run_frames(run: RunDir) -> list[Frame]:
@@ -70,7 +84,8 @@ def _dataset_frames(folder: DatasetDir) -> list[Frame]:
         for f in entry["files"]:
             if f.get("variant") == "render":   # style copies are not renders of the renderer under test
                 frames.append(Frame(folder.path / f["file_name"], f"{slot:06d}", "render", preset, entry["scene"],
-                                    boxes, frozenset(entry.get("occluded") or ())))
+                                    boxes, frozenset(entry.get("occluded") or ()),
+                                    up=_ups(entry.get("up"), folder.path / f["file_name"])))
     if not frames:
         raise InputError(f"dataset {folder.path} holds no finished render yet; build it with `isu-validate dataset`")
     return frames
@@ -93,7 +108,8 @@ def _pairs_frames(pairs: PairsDir) -> list[Frame]:
         for real in sample.real_frames():
             frames.append(Frame(real, f"{sample.name}/{real.stem}", "stand-in" if is_stand_in(real) else "real",
                                 base.preset, base.scene, base.boxes, base.occluded, own_boxes=False,
-                                boxes_size=(size["width"], size["height"]) if "width" in size else None))
+                                boxes_size=(size["width"], size["height"]) if "width" in size else None,
+                                up=base.up))
     if not frames:
         raise InputError(f"pairs folder {pairs.root} has no sim.png and no real frames")
     return frames
