@@ -95,6 +95,21 @@ def test_an_existing_run_is_not_overwritten_and_resume_checks_the_configuration(
     assert summary.evaluated_now == 6 and summary.tests == 12
 
 
+def test_a_run_started_by_another_version_of_its_search_is_not_resumed(tmp_path):
+    run_search(config(tmp_path / "run", algorithm="surrogate", budget_tests=6))
+    run_file = tmp_path / "run" / "run.json"
+    run = json.loads(run_file.read_text())
+    assert run["versions"]["search"] == "surrogate-2"
+    run["versions"]["search"] = "surrogate-1"            # as the search before the coupled error draws wrote it
+    run_file.write_text(json.dumps(run))
+    with pytest.raises(RunError, match="started by search surrogate-1; this installation's is surrogate-2"):
+        run_search(config(tmp_path / "run", algorithm="surrogate", budget_tests=12), resume=True)
+    assert len(records_of(tmp_path / "run")) == 6        # nothing evaluated, nothing lost
+    del run["versions"]["search"]                         # a run from before versions: checked scene by scene
+    run_file.write_text(json.dumps(run))
+    assert run_search(config(tmp_path / "run", algorithm="surrogate", budget_tests=12), resume=True).tests == 12
+
+
 def _cli(run_dir, *extra, env=None):
     return [sys.executable, "-m", "isu_validate.cli", "run", "--out", str(run_dir), "--pipeline-factory", FACTORY,
             "--budget", "30", "--pop-size", "6", "--seed", "11", "--no-report", *extra]

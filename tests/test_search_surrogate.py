@@ -216,3 +216,34 @@ def test_it_beats_its_first_version_on_two_feature_conjunctions_with_noise():
     first = strict(lambda sp, pop, seed: SurrogateSearch(sp, pop, seed, screen="mean", top_share=(0.3, 0.3, 1)))
     chance = strict(lambda sp, pop, seed: make_algorithm("rs", sp, pop, seed))
     assert chance < 0.1 and now > 2 * chance and now > 1.4 * first
+
+
+def test_a_things_questions_share_its_error_draw():
+    """A SUT that misses a thing answers the questions that exist only with it (its colour) wrong too.
+    The screen draws them together: here thing and colour are wrong together in half the tests, and only
+    both at once reach beyond the tail, so the scene scores about twice what independent draws give."""
+    features = {"thing": {"type": "categorical", "values": ["YES", "NO"], "predicted": True, "weight": 1.0,
+                          "question": "thing?", "options": ["YES", "NO"]},
+                "colour": {"type": "categorical", "values": ["RED", "BLUE"], "predicted": True, "weight": 1.0,
+                           "question": "colour?", "options": ["RED", "BLUE", "NONE"],
+                           "active_when": {"thing": "YES"}},
+                "x": {"type": "categorical", "values": ["YES", "NO"], "predicted": True, "weight": 2.0,
+                      "question": "x?", "options": ["YES", "NO"]}}
+    space = space_from_dict({"features": features})
+    search = SurrogateSearch(space, 10, seed=0)
+    search.model.mode = "features"                          # (what the first verdicts with features set)
+    assert search._error_roots().tolist() == [0, 0, 2]     # thing, colour, x: the colour draws the thing's
+    scenes = [{"thing": "YES", "colour": ("RED", "BLUE")[i % 2], "x": "YES"} for i in range(400)]
+    errors = [{"thing": float(i % 4 < 2), "colour": float(i % 4 < 2), "x": 0.0} for i in range(400)]
+    search.model.observe([space.canonical(s) for s in scenes], errors)
+    search._fitness = np.full(400, 0.7)                     # the archive's tail: a loss of 0.3
+    probe = [space.canonical(scenes[0])]
+    together = search._scores(probe, 400).mean()
+    search._error_roots = lambda: np.arange(3)            # each question its own draw
+    apart = search._scores(probe, 400).mean()
+    assert together == pytest.approx(0.5 * 0.2, abs=0.015) and apart == pytest.approx(0.25 * 0.2, abs=0.015)
+    paper = SurrogateSearch(SPACE, 10, seed=0)
+    paper.model.mode = "features"
+    roots = dict(zip(paper.model.targets, (paper.model.targets[i] for i in paper._error_roots())))
+    assert roots["luggage_position"] == roots["luggage_colour"] == "luggage"
+    assert roots["child"] == roots["child_seat_orientation"] == "child_seat" and roots["seat_belt"] == "seat_belt"

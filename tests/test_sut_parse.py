@@ -149,6 +149,7 @@ def test_a_run_asks_in_its_prompt_style_and_resumes_in_it(tmp_path):
     from isu_validate.pipeline import build_components
     from isu_validate.archive.run_file import ResumeMismatch, check_run_dir, write_run_file
     from isu_validate.commands.run import _mismatch_message
+    from isu_validate.search import make_algorithm
     from isu_validate.search.loop import _run_file_content
 
     space = load_space()
@@ -160,7 +161,8 @@ def test_a_run_asks_in_its_prompt_style_and_resumes_in_it(tmp_path):
         parts = build_components(config.pipeline, space)   # the real renderer (not started), SUT and judge
         assert parts.build_request(space, SCENE, "x.png", "vqa", None).prompt.startswith(opening)
         # run.json, as a run writes it
-        write_run_file(config.pipeline.run_dir, _run_file_content(config, space, config.identity()))
+        write_run_file(config.pipeline.run_dir, _run_file_content(config, space, config.identity(),
+                                                                   make_algorithm("surrogate", space, 6, 0)))
     # resuming takes the style from run.json; another one is refused by name
     resumed = config_from_args(parser.parse_args(["--out", str(tmp_path / "b"), "--resume"]))
     assert resumed.pipeline.prompt_style == "compact"

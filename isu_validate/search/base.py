@@ -16,6 +16,9 @@ _TOP_UP_TRIES = 200
 
 class SearchAlgorithm:
     name = ""
+    # bumped whenever a seed makes the algorithm propose other scenes: run.json records it, and a resumed run
+    # of another version is refused before it replays (its archive holds scenes this version would not propose)
+    version = 1
 
     def __init__(self, space: SceneSpace, pop_size: int, seed: int):
         if pop_size < 2:

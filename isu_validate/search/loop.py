@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from ..archive import Archive, TestRecord
-from ..archive.run_file import ARCHIVE_FILE, RUN_FILE, RunError, check_run_dir, write_run_file
+from ..archive.run_file import ARCHIVE_FILE, RUN_FILE, RunError, check_run_dir, read_run_file, write_run_file
 from ..execution import make_executor
 from ..config import RunConfig   # a light module: the CLI shows RunConfig's defaults
 from ..pipeline import Job, check_render_settings
@@ -48,10 +48,14 @@ class RunSummary:
     population: list = field(default_factory=list)
 
 
-def _versions() -> dict:
+def search_version(algorithm) -> str:
+    return f"{algorithm.name}-{algorithm.version}"
+
+
+def _versions(algorithm) -> dict:
     from ..render.renderer import RENDERER_VERSION   # `replay` re-renders a lost frame only with the same one
 
-    out = {"python": platform.python_version(), "renderer": RENDERER_VERSION}
+    out = {"python": platform.python_version(), "renderer": RENDERER_VERSION, "search": search_version(algorithm)}
     for name in ("isu-validate", "pymoo", "numpy", "bpy", "torch"):
         try:
             out[name] = version(name)
@@ -77,10 +81,12 @@ def run_search(config: RunConfig, resume: bool = False, progress_stream=None) ->
         identity["learned_from"] = _learn(algorithm, config, space)
     new = check_run_dir(run_dir, identity, space.hash,
                         {"budget_tests": config.budget_tests, "budget_s": config.budget_s}, resume)
+    if not new:
+        _check_search_version(run_dir, algorithm)
     executor = make_executor(config.pipeline, config.workers, config.cluster)  # builds (checks) every component
     try:
         if new:
-            write_run_file(run_dir, _run_file_content(config, space, identity))
+            write_run_file(run_dir, _run_file_content(config, space, identity, algorithm))
         summary, streak = _search(config, space, run_dir, algorithm, executor, progress_stream)
     finally:
         executor.close()
@@ -99,9 +105,20 @@ def _learn(algorithm, config: RunConfig, space) -> str:
     return f"{len(prior.records)} tests, {prior.digest}"
 
 
-def _run_file_content(config: RunConfig, space, identity: dict) -> dict:
+def _check_search_version(run_dir: Path, algorithm) -> None:
+    """A run started by another version of its search cannot be resumed: the seed would propose other scenes
+    than its archive holds. (A run from before versions were recorded is checked scene by scene instead.)"""
+    started = (read_run_file(run_dir).get("versions") or {}).get("search")
+    if started not in (None, search_version(algorithm)):
+        raise RunError(f"{run_dir} was started by search {started}; this installation's is "
+                       f"{search_version(algorithm)}, which proposes other scenes for the same seed: start a new "
+                       f"run in another folder (a surrogate run started with --learn-from {run_dir} learns from "
+                       "this one's tests)")
+
+
+def _run_file_content(config: RunConfig, space, identity: dict, algorithm) -> dict:
     return {"identity": identity, "config": asdict(config), "space_hash": space.hash,
-            "space_source": space.source, "space": space.to_dict(), "versions": _versions(),
+            "space_source": space.source, "space": space.to_dict(), "versions": _versions(algorithm),
             "started": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
 
 

@@ -10,7 +10,8 @@ Each generation (after a first one of random scenes):
    and fresh random scenes (exploration); every one valid, none tested before;
 3. each slot of the generation draws the surrogate once from its posterior (batch
    Thompson sampling), scores every candidate by the loss it would reach beyond the
-   archive's strict tail under that draw (``_scores``) and, among the best-scored share
+   archive's strict tail under that draw (``_scores``: the questions that exist only with a
+   thing, its suitcase's position, err together with the thing's own) and, among the best-scored share
    (growing with the archive), takes the one farthest from every failure found so far
    and every candidate chosen before it.  Confident weaknesses are exploited, uncertain regions still get
    tried, and the failures spread over the space instead of piling onto one region
@@ -49,6 +50,7 @@ NOVELTY_REFERENCE = 500                 # failing tests the novelty is measured 
 
 class SurrogateSearch(SearchAlgorithm):
     name = "surrogate"
+    version = 2     # 2: a thing's questions share its error draw in the screen
 
     def __init__(self, space, pop_size, seed, screen: str = "tail", top_share: tuple = TOP_SHARE):
         super().__init__(space, pop_size, seed)
@@ -138,13 +140,27 @@ class SurrogateSearch(SearchAlgorithm):
         rates, weights = self.model.sample_rates(canonical, n_draws)        # (D, S, T), (S, T)
         share = (weights / np.maximum(weights.sum(axis=1, keepdims=True), 1e-12)).astype(np.float32)
         tail = self._tail_loss()
-        uniforms = self.rng.random((MC_SAMPLES, rates.shape[2]))            # common random numbers
+        # common random numbers; a question that exists only with another's thing (the suitcase's position)
+        # shares that thing's draw: a SUT that misses the suitcase answers its position wrong too
+        uniforms = self.rng.random((MC_SAMPLES, rates.shape[2]))[:, self._error_roots()]
         scores = np.empty(rates.shape[:2])
         for d, rate in enumerate(rates):
             wrong = (uniforms[None, :, :] < rate[:, None, :]).astype(np.float32)   # (S, M, T)
             loss = np.matmul(wrong, share[:, :, None])[:, :, 0]                   # (S, M)
             scores[d] = np.maximum(loss - tail, 0.0).mean(axis=1) + TIE_BREAK * (rate * share).sum(axis=1)
         return scores
+
+    def _error_roots(self) -> np.ndarray:
+        """Per target, the target whose error draw it shares: the predicted feature its existence hangs on
+        (``active_when``, followed up to the first one that needs none), else itself."""
+        targets = self.model.targets
+        index = {t: i for i, t in enumerate(targets)}
+
+        def root(name: str) -> str:
+            condition = self.space.features[name].active_when
+            parents = [f for f in (condition.features if condition else ()) if f in index]
+            return root(parents[0]) if parents else name
+        return np.array([index[root(t)] for t in targets])
 
     def _tail_loss(self) -> float:
         """The loss (1 - f_qa) of the archive's ``STRICT_QUANTILE``: the aim tightens as failures are found."""
