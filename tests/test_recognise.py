@@ -246,3 +246,14 @@ def test_a_malformed_up_in_a_label_names_the_frame(tmp_path, up):
     with pytest.raises(InputError, match=r"label of .*bad\.png has a malformed 'up'"):
         run([tmp_path / "frames"], tmp_path / "out")
     assert not (tmp_path / "out" / "frames.jsonl").exists()
+
+
+def test_a_real_frame_of_another_aspect_gets_the_sims_boxes_and_tops_stretched_with_it():
+    from pathlib import Path
+
+    from isu_validate.recognition.frames import Frame
+    sim = Frame(Path("x.png"), "x", "real", None, {}, {"phone": (10, 20, 30, 40)}, boxes_size=(100, 100),
+                up={"phone": (0.6, -0.8)})
+    assert sim.boxes_for(200, 100) == {"phone": (20, 20, 60, 40)}
+    assert sim.up_for(200, 100)["phone"] == pytest.approx((1.2 / np.hypot(1.2, 0.8), -0.8 / np.hypot(1.2, 0.8)))
+    assert sim.up_for(100, 100) == {"phone": (0.6, -0.8)}

@@ -50,18 +50,24 @@ class Frame:
 
     def boxes_for(self, width: int, height: int) -> dict:
         """The boxes in a (width x height) image: a real frame may be shot larger than the sim frame."""
-        if not self.boxes_size or tuple(self.boxes_size) == (width, height):
+        if (scale := self._scale(width, height)) is None:
             return dict(self.boxes)
-        sx, sy = width / self.boxes_size[0], height / self.boxes_size[1]
+        sx, sy = scale
         return {k: (round(b[0] * sx), round(b[1] * sy), round(b[2] * sx), round(b[3] * sy))
                 for k, b in self.boxes.items()}
 
     def up_for(self, width: int, height: int) -> dict:
         """Where each thing's top points in a (width x height) image (a frame shot at another aspect)."""
-        if not self.boxes_size or tuple(self.boxes_size) == (width, height):
+        if (scale := self._scale(width, height)) is None:
             return dict(self.up)
-        sx, sy = width / self.boxes_size[0], height / self.boxes_size[1]
-        return {k: _unit(u[0] * sx, u[1] * sy) for k, u in self.up.items()}
+        stretched = {k: (u[0] * scale[0], u[1] * scale[1]) for k, u in self.up.items()}
+        return {k: (x / float(np.hypot(x, y)), y / float(np.hypot(x, y))) for k, (x, y) in stretched.items()}
+
+    def _scale(self, width: int, height: int) -> tuple[float, float] | None:
+        """(sx, sy) from the image the boxes were measured on to a (width x height) one; None: the same."""
+        if not self.boxes_size or tuple(self.boxes_size) == (width, height):
+            return None
+        return width / self.boxes_size[0], height / self.boxes_size[1]
 
     def light(self) -> dict[str, str]:
         return {f: str(self.scene.get(f, "?")) for f in LIGHTS}
@@ -76,11 +82,6 @@ class Frame:
             hidden = unit.feature in self.occluded or unit.instance not in self.boxes
             out.append((unit, "occluded" if hidden else "visible"))
         return out
-
-
-def _unit(x: float, y: float) -> tuple[float, float]:
-    n = float(np.hypot(x, y))
-    return (x / n, y / n) if n > 0 else (0.0, -1.0)
 
 
 def read_image(path: Path) -> np.ndarray:

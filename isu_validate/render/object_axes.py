@@ -21,14 +21,12 @@ STEP_M = 0.02    # the top is projected from the thing's origin to a point this 
 FORESHORTENED = 0.2   # an axis shorter in the frame than this share of its side-on length points at the lens
 
 
-def seat_objects_up(cabin: dict, camera, present: list[str]) -> dict[str, list[float]]:
-    """{instance: [dx, dy]}: the image direction (x right, y down, unit length) of the top of each thing of
-    ``present`` on the co-driver seat, through ``camera`` (a ``capture.camera.Camera``). A thing whose
+def seat_objects_up(cabin: dict, camera) -> dict[str, list[float]]:
+    """{instance: [dx, dy]}: the image direction (x right, y down, unit length) of the top of each thing the
+    cabin places on the co-driver seat, through ``camera`` (a ``capture.camera.Camera``). A thing whose
     axis points (almost) at the camera has no direction in the frame and is left out."""
     out = {}
-    for name in present:
-        if name not in CODRIVER_SEAT_OBJECTS:
-            continue
+    for name in CODRIVER_SEAT_OBJECTS:
         spec = cabin["codriver_seat"][name]
         origin = np.asarray(spec["position"], dtype=float)
         # Blender's XYZ Euler (rotate about X, then Y, then Z in the world frame): scipy's extrinsic "xyz"

@@ -25,8 +25,8 @@ from .cabin import cabin_hash, load_cabin
 from .cache import RenderCache
 from .camera import pinhole_plan
 from .frame_check import frame_problem, frame_stats
-from .object_axes import seat_objects_up
 from .gpu import device_identity, resolve_render_device
+from .object_axes import seat_objects_up
 from .outputs import channel_paths, footprint_pixels, parse_channels, write_outputs
 from .people import People, PeopleStore
 from .people.store import code_version as people_version
@@ -65,6 +65,7 @@ class BlenderRenderer:
         self.render_rig = self.rig.scaled(self.preset.scale)
         self.plan = pinhole_plan(self.render_rig)
         self.cabin = cabin if isinstance(cabin, dict) else load_cabin(cabin)
+        self.seat_up = seat_objects_up(self.cabin, self.render_rig)   # fixed by the rig: the labels' `up`
         self.channels = parse_channels(channels)
         self.space = space if isinstance(space, SceneSpace) else load_space(space or "isu-paper")
         self.parts = needed_parts(self.space)                        # whose footprints each frame needs
@@ -109,7 +110,7 @@ class BlenderRenderer:
         frame = frame_stats(out)
         problem = frame_problem(frame, visible, driver_expected=self.show_people)
         label = channel_paths(out)["label"]
-        up = seat_objects_up(self.cabin, self.render_rig, list(visible))
+        up = {name: u for name, u in self.seat_up.items() if name in visible}
         self._write_label(label, canonical, key, cached, timings, {
             "visible": visible, "parts": parts, "up": up, "frame": frame, "frame_problem": problem,
             "visibility": shares, "occluded": occluded, "min_visible": self.min_visible,
