@@ -36,6 +36,7 @@ COMMANDS = {
     "replay": ("replay", "ask a new SUT about a run's stored images; fixed and new failures"),
     "exposure": ("exposure", "camera exposure, response, noise and colour: fit, apply, check"),
     "dataset": ("dataset", "render a training dataset: images, truth, COCO masks, VQA chats"),
+    "transfer": ("transfer", "what renders taught: a SUT on labelled real photos beside renders"),
 }
 
 __all__ = ["COMMANDS", "UserError", "build_parser", "main"]

@@ -24,6 +24,7 @@ BENCHES = {
     "dataset": "dataset: images/s with masks, and COCO masks against a re-render",
     "augment": "the fix loop: focused vs uniform data, retrain the reference ISU, replay",
     "recognise": "render seconds per frame against photo-trained models' recognition rates, per preset",
+    "transfer": "recipes of training renders, judged on labelled real photos",
 }
 
 

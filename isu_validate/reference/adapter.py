@@ -34,11 +34,16 @@ class ReferenceAdapter:
     def send(self, request: SUTRequest) -> Exchange:
         start = time.perf_counter()
         try:
+            meta = {}
             if request.mode == "vqa":
-                content = {"answers": self.model.answer(Path(request.image), [q.key for q in request.questions])}
+                keys = [q.key for q in request.questions]
+                answers, probabilities = self.model.read(Path(request.image))
+                content = {"answers": {k: answers[k] for k in keys if k in answers}}
+                # the heads' class probabilities, beside the reply (never in it): what an AUC needs
+                meta["probabilities"] = {k: probabilities[k] for k in keys if k in probabilities}
             else:
                 content = {"caption": self.model.caption(Path(request.image))}
         except (OSError, ValueError) as exc:
             return Exchange(error=f"reference ISU could not read the image: {exc}",
                             latency_s=time.perf_counter() - start)
-        return Exchange(raw=json.dumps(content), content=content, latency_s=time.perf_counter() - start)
+        return Exchange(raw=json.dumps(content), content=content, latency_s=time.perf_counter() - start, meta=meta)

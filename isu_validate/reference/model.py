@@ -34,9 +34,17 @@ class ReferenceISU:
     def predict(self, image: Path) -> dict[str, str]:
         """An answer for every feature it has a head for; NONE where its own answers say the
         thing is absent (no luggage seen -> no luggage colour)."""
+        return self.read(image)[0]
+
+    def read(self, image: Path) -> tuple[dict[str, str], dict[str, dict[str, float]]]:
+        """(answers as ``predict`` gives them, each head's class probabilities): the probabilities are what
+        a ROC curve of the model needs (``transfer``'s AUC); the answers are their argmax, made NONE as above."""
         features = self.backbone.features([read_rgb(image)])
-        raw = {name: head.predict(features)[0] for name, head in self.heads.items()}
-        return {name: (answer if self._active(name, raw) else "NONE") for name, answer in raw.items()}
+        probabilities = {name: dict(zip(head.classes, map(float, head.probabilities(features)[0]), strict=True))
+                         for name, head in self.heads.items()}
+        raw = {name: max(p, key=p.get) for name, p in probabilities.items()}
+        answers = {name: (answer if self._active(name, raw) else "NONE") for name, answer in raw.items()}
+        return answers, probabilities
 
     def _active(self, name: str, answers: dict[str, str]) -> bool:
         condition = self.space.features[name].active_when

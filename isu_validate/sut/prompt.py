@@ -110,6 +110,14 @@ def build_request(space: SceneSpace, scene: Mapping[str, Any], image: str | Path
         raise InputError(f"unknown SUT mode {mode!r}; use 'vqa' (questions) or 'vc' (captioning)")
     if mode == "vc":
         return SUTRequest(mode="vc", image=Path(image), prompt=prompt or DEFAULT_CAPTION_PROMPT, questions=())
-    questions = space.questions(scene)
+    return questions_request(space, space.questions(scene), image, prompt, style)
+
+
+def questions_request(space: SceneSpace, questions: Sequence[Question], image: str | Path, prompt: str | None = None,
+                      style: str | None = None) -> SUTRequest:
+    """The VQA request asking ``questions`` about ``image``: a scene's (``build_request``), or the features a
+    real photograph's labels answer (``transfer``), each question carrying its truth."""
+    from ..protocols import SUTRequest
+
     return SUTRequest(mode="vqa", image=Path(image), prompt=vqa_prompt(space, questions, prompt, style),
                       questions=tuple(questions))

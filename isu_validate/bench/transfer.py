@@ -1,0 +1,169 @@
+"""``isu-validate bench transfer REAL... --labels MAP --recipe NAME=SPEC... --out DIR``: recipes of renders side
+by side, each judged by what a reference ISU trained only on them does on the real sets.
+
+A recipe is how the training renders are made, or a model already trained from renders:
+- ``NAME=train:camera=RIG,space=SPACE,cabin=RIG,preset=P,n=N,held_out=N,seed=S`` (every key optional; the
+  bench's --n, --held-out, --preset and --seed are the defaults): ``reference train`` as it is, in
+  DIR/recipes/NAME (renders kept, so an interrupted bench goes on);
+- ``NAME=model:DIR[,renders=FOLDER]``: a model ``reference train`` made elsewhere, e.g. with another
+  renderer version's checkout (``reference train --out DIR --workdir W``; its held-out renders, W/held-out,
+  are the render side of KID).
+Each recipe's model is then measured by ``transfer`` on the real sets (DIR/recipes/NAME/transfer), against
+its own held-out renders; one table: balanced accuracy per feature and set with its 95% interval, KID of
+each real set against the recipe's held-out renders, and the seconds each recipe took.
+"""
+from __future__ import annotations
+
+import json
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..errors import InputError
+from ..transfer.arguments import add_real_set_arguments
+
+TRAIN_KEYS = {"camera": str, "cabin": str, "space": str, "preset": str, "n": int, "held_out": int, "seed": int}
+
+
+@dataclass
+class Recipe:
+    name: str
+    kind: str                          # train | model
+    options: dict = field(default_factory=dict)
+
+
+def register_bench(sub) -> None:
+    p = sub.add_parser("transfer", help="recipes of training renders, judged on labelled real photos",
+                       description=__doc__.split("\n\n", 1)[1])
+    add_real_set_arguments(p)
+    p.add_argument("--recipe", action="append", required=True, metavar="NAME=SPEC",
+                   help="NAME=train:KEY=VALUE,... or NAME=model:DIR[,renders=FOLDER] (repeatable)")
+    p.add_argument("--n", type=int, default=300, help="training scenes of a train recipe (default 300)")
+    p.add_argument("--held-out", type=int, default=100, help="held-out scenes of a train recipe (default 100)")
+    p.add_argument("--preset", default="draft", help="render preset of a train recipe (default draft)")
+    p.add_argument("--render-device", default="cpu", help="Cycles device of a train recipe (default cpu)")
+    p.add_argument("--out", type=Path, required=True, help="folder for the recipes' models, measurements and table")
+    p.set_defaults(func=run)
+
+
+def parse_recipe(text: str) -> Recipe:
+    name, sep, spec = text.partition("=")
+    kind, sep2, rest = spec.partition(":")
+    if not sep or not name.strip() or not sep2 or kind not in ("train", "model"):
+        raise InputError(f"--recipe {text!r} must read NAME=train:KEY=VALUE,... or NAME=model:DIR[,renders=FOLDER]")
+    if kind == "model":
+        folder, _, extra = rest.partition(",renders=")
+        return Recipe(name.strip(), kind, {"model": folder, "renders": extra or None})
+    options = {}
+    for pair in filter(None, rest.split(",")):
+        key, eq, value = pair.partition("=")
+        if not eq or key not in TRAIN_KEYS:
+            raise InputError(f"--recipe {name}: {pair!r} is not KEY=VALUE with KEY one of {', '.join(TRAIN_KEYS)}")
+        try:
+            options[key] = TRAIN_KEYS[key](value)
+        except ValueError:
+            raise InputError(f"--recipe {name}: {key} must be {TRAIN_KEYS[key].__name__}, got {value!r}") from None
+    return Recipe(name.strip(), kind, options)
+
+
+def run(args) -> int:
+    recipes = [parse_recipe(r) for r in args.recipe]
+    if len({r.name for r in recipes}) < len(recipes):
+        raise InputError("two recipes share a name: give each --recipe its own NAME")
+    rows = []
+    for recipe in recipes:
+        folder = args.out / "recipes" / recipe.name
+        started = time.perf_counter()
+        model, renders, made = _model(recipe, folder, args)
+        trained_s = time.perf_counter() - started
+        summary = _measure(args, recipe, model, renders, folder / "transfer")
+        rows.append({"recipe": recipe.name, "made": made, "train_s": round(trained_s, 1),
+                     "transfer_s": summary["seconds"], "summary": summary})
+    table = format_table(rows)
+    print(table)
+    (args.out / "table.txt").write_text(table + "\n")
+    (args.out / "bench.json").write_text(json.dumps(
+        [{k: v for k, v in r.items() if k != "summary"} | {"scores": _headline(r["summary"])} for r in rows],
+        indent=1) + "\n")
+    return 0
+
+
+def _model(recipe: Recipe, folder: Path, args) -> tuple[Path, Path | None, str]:
+    """(model folder, its held-out renders, what made it)."""
+    if recipe.kind == "model":
+        model = Path(recipe.options["model"])
+        if not (model / "heads.npz").is_file():
+            raise InputError(f"--recipe {recipe.name}: {model} is no reference ISU model (no heads.npz)")
+        card = json.loads((model / "model_card.json").read_text()) if (model / "model_card.json").is_file() else {}
+        renders = Path(recipe.options["renders"]) if recipe.options["renders"] else None
+        return model, renders, f"model {model} (renderer {card.get('renderer', '?')})"
+    return _train(recipe, folder, args)
+
+
+def _train(recipe: Recipe, folder: Path, args) -> tuple[Path, Path, str]:
+    from ..reference.training import train_reference
+    from ..render import RENDERER_VERSION, open_renderer
+    from ..space import load_space
+
+    o = {"camera": "default", "cabin": "default", "space": "isu-paper", "preset": args.preset, "n": args.n,
+         "held_out": args.held_out, "seed": args.seed, **recipe.options}
+    model, made = folder / "model", json.dumps(o, sort_keys=True)
+    if (folder / "recipe.json").is_file() and (folder / "recipe.json").read_text() != made:
+        raise InputError(f"{folder} holds recipe {recipe.name} made with other settings "
+                         f"({(folder / 'recipe.json').read_text()}); choose another --out or recipe name")
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "recipe.json").write_text(made)
+    description = f"{RENDERER_VERSION}, " + ", ".join(f"{k}={v}" for k, v in o.items())
+    if (model / "heads.npz").is_file():
+        return model, folder / "held-out", description
+    space = load_space(o["space"])
+    renderer = open_renderer(preset=o["preset"], camera=o["camera"], cabin=o["cabin"], space=space,
+                             cache_dir=folder / "cache", log_dir=folder / "logs", device=args.render_device)
+    try:
+        train_reference(space, renderer, model, folder, o["n"], o["held_out"], o["seed"], o["preset"],
+                        renderer_version=RENDERER_VERSION, device=args.device)
+    finally:
+        renderer.close()
+    return model, folder / "held-out", description
+
+
+def _measure(args, recipe: Recipe, model: Path, renders: Path | None, out: Path) -> dict:
+    from ..transfer import TransferSettings, measure_transfer
+
+    settings = TransferSettings(tuple(args.real), tuple(args.labels), "reference", {"model_dir": str(model)},
+                                args.space, str(renders) if renders else None, args.layout, args.skip_conflicts,
+                                args.limit, seed=args.seed, device=args.device)
+    print(f"bench transfer: measuring recipe {recipe.name}", file=sys.stderr)
+    return measure_transfer(settings, out)
+
+
+def _headline(summary: dict) -> dict:
+    return {name: {f: {k: sc[k] for k in ("n", "balanced_accuracy", "balanced_accuracy_ci95", "auc")}
+                   for f, sc in s["scores"].items()} for name, s in summary["sets"].items()} | {
+        "renders": {f: sc["balanced_accuracy"] for f, sc in (summary.get("renders") or {}).get("scores", {}).items()},
+        "kid": {name: r["kid_mean"] for name, r in (summary.get("realism") or {}).items()}}
+
+
+def format_table(rows: list[dict]) -> str:
+    """recipe x (set, feature): balanced accuracy [95% CI]; KID per set; seconds."""
+    lines = []
+    for r in rows:
+        s = r["summary"]
+        lines.append(f"{r['recipe']}: {r['made']}  (train {r['train_s']} s, transfer {r['transfer_s']} s)")
+        for name, real in s["sets"].items():
+            kid = (s.get("realism") or {}).get(name)
+            cells = [f"{f} BA {_ci(sc)}" for f, sc in real["scores"].items()]
+            kid_text = f"KID {kid['kid_mean']:.4f} ± {kid['kid_std']:.4f}" if kid else "KID -"
+            lines.append(f"  real {name:<18} " + "; ".join(cells) + f"; {kid_text}")
+        if s.get("renders"):
+            cells = [f"{f} BA {_ci(sc)}" for f, sc in s["renders"]["scores"].items()]
+            lines.append(f"  {'own held-out renders':<23} " + "; ".join(cells))
+    return "\n".join(lines)
+
+
+def _ci(sc: dict) -> str:
+    ba, ci = sc["balanced_accuracy"], sc["balanced_accuracy_ci95"]
+    if ba is None:
+        return "-"
+    return f"{ba:.2f} [{ci[0]:.2f}, {ci[1]:.2f}] (n {sc['n']})" if ci else f"{ba:.2f} (n {sc['n']})"

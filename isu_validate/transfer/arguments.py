@@ -1,0 +1,21 @@
+"""The options that name real photo sets and how they are read: one definition for ``transfer`` and
+``bench transfer`` (argparse only; nothing heavy is imported)."""
+from __future__ import annotations
+
+from ..devices import add_device_argument
+
+
+def add_real_set_arguments(p) -> None:
+    """The real sets and how they are read and asked: shared by ``transfer`` and ``bench transfer``."""
+    p.add_argument("real", nargs="+", metavar="REAL",
+                   help="labelled real photo set: class folders, YOLO (data.yaml), COCO .json or CSV")
+    p.add_argument("--labels", action="append", required=True, metavar="MAP.toml",
+                   help="label map: one for every set, or one per set in order")
+    p.add_argument("--layout", choices=("classes", "yolo", "coco", "csv"),
+                   help="the sets' layout (default: told from the files)")
+    p.add_argument("--skip-conflicts", action="store_true",
+                   help="leave a photo out of a feature its labels answer two ways (counted), instead of stopping")
+    p.add_argument("--limit", type=int, help="ask about the first N labelled photos of each set only")
+    p.add_argument("--space", default="isu-paper", help="scene space whose questions are asked (default isu-paper)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the bootstrap and of KID's subsets (default 0)")
+    add_device_argument(p)

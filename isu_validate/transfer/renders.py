@@ -1,0 +1,82 @@
+"""The renders beside the real photographs: what the same SUT does on rendered scenes, and their images.
+
+Two sources, the first that applies:
+- ``--renders DATASET`` (a folder ``isu-validate dataset`` wrote): its renders are asked the same questions
+  through the same SUT, the truth from each slot's scene; its images are also the render side of KID/FID.
+- a reference ISU model folder (``--model``, or ``--sut reference``): its own held-out renders, from the
+  backbone features stored beside its heads (``held_out_features.npz``): the figures its card reports,
+  with no image rendered again. No images, so no KID without ``--renders``.
+A folder of plain images as ``--renders`` gives KID/FID only (no truth to score against).
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..dataset.folder import DatasetDir
+from ..errors import InputError, InputNotFound
+from ..image_files import IMAGE_SUFFIXES
+from ..space import SceneSpace
+from .ask import Item
+
+
+def dataset_items(folder: Path, space: SceneSpace, features: list[str]) -> list[Item]:
+    """The dataset's renders (style copies left out) with their true answers for ``features``."""
+    dataset = DatasetDir(folder)
+    items = []
+    for slot, entry in sorted(dataset.entries().items()):
+        if entry.get("status") != "ok":
+            continue
+        truth = {q.key: q.truth for q in space.questions(entry["scene"]) if q.key in features}
+        for f in entry["files"]:
+            if f.get("variant") == "render" and truth:
+                items.append(Item(f"{slot:06d}", folder / f["file_name"], truth))
+    if not items:
+        raise InputError(f"dataset {folder} holds no finished render that answers {', '.join(features)}")
+    return items
+
+
+def render_images(folder: Path) -> list[Path]:
+    """The render images of ``--renders``: a dataset's renders, or the images of a plain folder."""
+    if not folder.is_dir():
+        raise InputNotFound(f"render set {folder} is not a folder: give a dataset (`isu-validate dataset --out`) "
+                            "or a folder of rendered images")
+    if DatasetDir(folder).is_dataset():
+        return [folder / f["file_name"] for _, e in sorted(DatasetDir(folder).entries().items())
+                if e.get("status") == "ok" for f in e["files"] if f.get("variant") == "render"]
+    images = sorted(p for p in folder.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES and p.is_file())
+    if not images:
+        raise InputError(f"render set {folder} holds no images")
+    return images
+
+
+def held_out_records(model_dir: Path, space: SceneSpace, features: list[str]) -> tuple[list[dict], dict]:
+    """Records (as ``ask.ask_all`` makes them) of the reference model in ``model_dir`` on its own held-out
+    renders, from their stored features; and what those renders were (renderer, preset, n)."""
+    from ..reference.feature_bank import FILES, load_feature_set
+    from ..reference.heads import load_heads
+
+    path = model_dir / FILES["held_out"]
+    if not path.is_file():
+        raise InputNotFound(f"the model in {model_dir} keeps no held-out features ({FILES['held_out']}); give a "
+                            "render set with --renders, or retrain it with `isu-validate reference train`")
+    held_out = load_feature_set(path)
+    heads = {h.feature: h for h in load_heads(model_dir)[0]}
+    if held_out.meta.get("space_hash") != space.hash:
+        raise InputError(f"the held-out features in {model_dir} belong to space {held_out.meta.get('space')!r}, not "
+                         f"{space.name!r}: pass --space {held_out.meta.get('space')}")
+    records = []
+    for feature in [f for f in features if f in heads]:
+        head = heads[feature]
+        rows = [i for i, scene in enumerate(held_out.scenes) if feature in scene]
+        if not rows:
+            continue
+        p = head.probabilities(held_out.features[rows].astype(np.float64))
+        for i, probs in zip(rows, p, strict=True):
+            records.append({"name": f"{i:05d}", "truth": {feature: space.features[feature].truth(
+                held_out.scenes[i][feature])}, "said": {feature: head.classes[int(np.argmax(probs))]},
+                "p": {feature: dict(zip(head.classes, map(float, probs), strict=True))}, "error": None})
+    about = {"source": f"held-out renders of {model_dir}", "renderer": held_out.meta.get("renderer"),
+             "preset": held_out.meta.get("preset"), "scenes": len(held_out.scenes)}
+    return records, about

@@ -1,0 +1,97 @@
+"""How well a SUT's answers about one feature match the truth: the figures ``transfer`` prints.
+
+Accuracy with its Wilson 95% interval; balanced accuracy (the mean recall over the true classes: always
+answering one class scores 1/k whatever the class shares) with a seeded, class-stratified percentile
+bootstrap interval; each class's recall with its Wilson interval; the majority-class baseline; the
+confusion matrix; the ROC AUC where the SUT gave probabilities (binary features). Questions the SUT left
+unanswered (an error, a reply with no option) are counted apart and left out of the rates.
+"""
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..recognition.tally import wilson
+
+BOOTSTRAP = 1000
+
+
+@dataclass(frozen=True)
+class Answer:
+    truth: str
+    said: str | None                 # None: unanswered
+    p_positive: float | None = None  # the SUT's probability of the positive class, when it gives one
+
+
+def positive_class(options: tuple[str, ...] | list[str]) -> str:
+    """The class an AUC ranks by: YES where the question has it, else its first option."""
+    return "YES" if "YES" in options else options[0]
+
+
+def score(answers: list[Answer], options: tuple[str, ...] | list[str], seed: int = 0) -> dict:
+    answered = [a for a in answers if a.said is not None]
+    truth_counts = Counter(a.truth for a in answers)
+    out = {"n": len(answers), "answered": len(answered), "unanswered": len(answers) - len(answered),
+           "truth_counts": dict(sorted(truth_counts.items())),
+           "said_counts": dict(sorted(Counter(a.said or "(unanswered)" for a in answers).items()))}
+    majority, count = max(sorted(truth_counts.items()), key=lambda kv: kv[1])
+    out["majority_baseline"] = {"class": majority, "accuracy": count / len(answers),
+                                "balanced_accuracy": 1.0 / len(truth_counts)}
+    if not answered:
+        return {**out, "accuracy": None, "accuracy_ci95": None, "balanced_accuracy": None,
+                "balanced_accuracy_ci95": None, "recall": {}, "confusion": None, "auc": None,
+                "p_positive_median": None}
+    truth = np.array([a.truth for a in answered])
+    said = np.array([a.said for a in answered])
+    hits = int((truth == said).sum())
+    classes = sorted(set(truth))
+    labels = list(dict.fromkeys([*options, *sorted(set(said) - set(options))]))
+    out.update(accuracy=hits / len(answered), accuracy_ci95=wilson(hits, len(answered)),
+               recall={c: _recall(truth, said, c) for c in classes},
+               balanced_accuracy=balanced_accuracy(truth, said),
+               balanced_accuracy_ci95=_bootstrap_ba(truth, said, seed),
+               confusion={"labels": labels,
+                          "rows": {c: [int(((truth == c) & (said == s)).sum()) for s in labels] for c in classes}},
+               auc=_auc(answered, positive_class(options)),
+               p_positive_median=_median_p(answered))
+    return out
+
+
+def _median_p(answered: list[Answer]) -> float | None:
+    """The median probability the SUT gave the positive class (a SUT that says YES to everything: near 1)."""
+    values = [a.p_positive for a in answered if a.p_positive is not None]
+    return float(np.median(values)) if values else None
+
+
+def balanced_accuracy(truth: np.ndarray, said: np.ndarray) -> float:
+    """Mean recall over the classes present in ``truth`` (scikit-learn's definition, without its warning
+    when a predicted class never occurs in the truth)."""
+    return float(np.mean([np.mean(said[truth == c] == c) for c in np.unique(truth)]))
+
+
+def _recall(truth: np.ndarray, said: np.ndarray, c: str) -> dict:
+    mask = truth == c
+    hits = int((said[mask] == c).sum())
+    return {"rate": hits / int(mask.sum()), "n": int(mask.sum()), "ci95": wilson(hits, int(mask.sum()))}
+
+
+def _bootstrap_ba(truth: np.ndarray, said: np.ndarray, seed: int) -> list[float] | None:
+    """95% percentile interval, resampling within each true class (the class shares stay fixed)."""
+    groups = [np.flatnonzero(truth == c) for c in np.unique(truth)]
+    if any(len(g) < 2 for g in groups):
+        return None
+    rng = np.random.default_rng(seed)
+    correct = truth == said
+    values = np.mean([correct[rng.choice(g, size=(BOOTSTRAP, len(g)))].mean(axis=1) for g in groups], axis=0)
+    return [float(np.percentile(values, 2.5)), float(np.percentile(values, 97.5))]
+
+
+def _auc(answered: list[Answer], positive: str) -> float | None:
+    scored = [a for a in answered if a.p_positive is not None]
+    if len(scored) < len(answered) or len({a.truth == positive for a in scored}) < 2:
+        return None   # some answers without a probability, or one class only: no ROC curve
+    from sklearn.metrics import roc_auc_score
+
+    return float(roc_auc_score([a.truth == positive for a in scored], [a.p_positive for a in scored]))

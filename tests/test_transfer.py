@@ -1,0 +1,200 @@
+"""``transfer``: labelled real photo sets read in four layouts, label maps, the scores' hard cases, and the
+command end to end on the shipped reference ISU (real photographs: scikit-image's, labelled here)."""
+import json
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from isu_validate.cli import main
+from isu_validate.errors import InputError
+from isu_validate.realphotos import label_photos, load_label_map, read_photo_set
+from isu_validate.space import load_space
+from isu_validate.transfer.scores import Answer, balanced_accuracy, score
+
+SPACE = load_space("isu-paper")
+
+
+def _photos():
+    from skimage import data
+    return [data.astronaut(), data.coffee(), data.chelsea(), data.rocket(), data.immunohistochemistry(),
+            data.hubble_deep_field()]
+
+
+def _save(path, rgb, size=(96, 72)):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    Image.fromarray(rgb).resize(size).save(path)
+
+
+@pytest.fixture(scope="module")
+def class_set(tmp_path_factory):
+    root = tmp_path_factory.mktemp("classes")
+    for i, rgb in enumerate(_photos()):
+        _save(root / "set" / f"c{i % 2}" / f"img{i}.jpg", rgb)
+    (root / "map.toml").write_text('[classes.c0]\nphone_position = "NO"\nseat_belt = "YES"\n'
+                                   '[classes.c1]\nphone_position = "P3"\n')
+    return root
+
+
+def _write_map(tmp_path, text):
+    path = tmp_path / "map.toml"
+    path.write_text(text)
+    return path
+
+
+# ---- layouts
+
+def test_class_folders_read_each_folder_as_a_class(class_set):
+    photo_set = read_photo_set(class_set / "set")
+    assert photo_set.layout == "classes"
+    assert sorted((p.path.name, p.classes) for p in photo_set.photos)[:2] == [("img0.jpg", ("c0",)),
+                                                                             ("img1.jpg", ("c1",))]
+
+
+def test_yolo_boxes_in_pixels_with_splits_and_background_images(tmp_path):
+    rgb = _photos()[0]
+    _save(tmp_path / "train" / "images" / "a.jpg", rgb, (200, 100))
+    _save(tmp_path / "valid" / "images" / "b.jpg", rgb, (200, 100))
+    (tmp_path / "train" / "labels").mkdir(parents=True)
+    (tmp_path / "train" / "labels" / "a.txt").write_text("1 0.5 0.5 0.2 0.4\n0 0.1 0.1 0.2 0.2\n")
+    (tmp_path / "data.yaml").write_text("names: ['seatbelt', 'phone']\n")
+    photo_set = read_photo_set(tmp_path)
+    by_name = {p.path.name: p for p in photo_set.photos}
+    assert photo_set.layout == "yolo" and set(by_name) == {"a.jpg", "b.jpg"}
+    assert [(b.label, b.xyxy) for b in by_name["a.jpg"].boxes] == [("phone", (80, 30, 120, 70)),
+                                                                   ("seatbelt", (0, 0, 40, 20))]
+    assert by_name["b.jpg"].boxes == () and "no label file" in photo_set.notes[0]
+
+
+def test_yolo_label_naming_an_unknown_class_is_an_error(tmp_path):
+    _save(tmp_path / "images" / "a.jpg", _photos()[0])
+    (tmp_path / "labels").mkdir()
+    (tmp_path / "labels" / "a.txt").write_text("3 0.5 0.5 0.2 0.2\n")
+    (tmp_path / "data.yaml").write_text("names: {0: phone}\n")
+    with pytest.raises(InputError, match="class 3 is not in data.yaml"):
+        read_photo_set(tmp_path)
+
+
+def test_coco_and_csv_layouts(tmp_path):
+    _save(tmp_path / "coco" / "x.jpg", _photos()[1], (100, 80))
+    (tmp_path / "coco" / "_annotations.coco.json").write_text(json.dumps({
+        "images": [{"id": 1, "file_name": "x.jpg", "width": 100, "height": 80}],
+        "categories": [{"id": 5, "name": "phone"}],
+        "annotations": [{"id": 1, "image_id": 1, "category_id": 5, "bbox": [10, 20, 30, 40]}]}))
+    coco = read_photo_set(tmp_path / "coco")
+    assert coco.layout == "coco" and coco.photos[0].boxes[0].xyxy == (10, 20, 40, 60)
+    _save(tmp_path / "csv" / "c6" / "y.jpg", _photos()[2])
+    (tmp_path / "csv" / "list.csv").write_text("subject,classname,img\np1,c6,y.jpg\np1,c6,gone.jpg\n")
+    listed = read_photo_set(tmp_path / "csv")
+    assert listed.layout == "csv" and listed.photos[0].classes == ("c6",) and "not found" in listed.notes[0]
+
+
+def test_a_folder_of_nothing_names_the_layouts(tmp_path):
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(InputError, match="cannot tell the layout"):
+        read_photo_set(tmp_path / "empty")
+
+
+# ---- label maps
+
+def test_label_map_takes_options_and_values_and_names_choices(tmp_path):
+    m = load_label_map(_write_map(tmp_path, '[classes.c1]\nphone_position = "P3"\n[classes.c0]\n'
+                                             'phone_position = "NO"\n'), SPACE)
+    assert m.classes == {"c1": {"phone_position": "YES"}, "c0": {"phone_position": "NO"}}
+    with pytest.raises(InputError, match="is not a feature of space 'isu-paper'; map one of: driver_gender"):
+        load_label_map(_write_map(tmp_path, '[classes.c1]\nphone = "YES"\n'), SPACE)
+    with pytest.raises(InputError, match=r"neither an answer option \(YES, NO\)"):
+        load_label_map(_write_map(tmp_path, '[classes.c1]\nseat_belt = "MAYBE"\n'), SPACE)
+    with pytest.raises(InputError, match="not asked of a SUT"):
+        load_label_map(_write_map(tmp_path, '[classes.c1]\nexternal_light = "LOW"\n'), SPACE)
+    with pytest.raises(InputError, match="no .boxes.NAME. maps"):
+        load_label_map(_write_map(tmp_path, '[classes.c1]\nseat_belt = "NO"\n[absent]\nseat_belt = "YES"\n'), SPACE)
+
+
+def test_absence_of_boxes_and_conflicting_labels(tmp_path):
+    from isu_validate.realphotos.layouts import Box, Photo, PhotoSet
+
+    m = load_label_map(_write_map(tmp_path, '[boxes.phone]\nphone_position = "YES"\n[boxes.belt]\n'
+                                             'seat_belt = "YES"\n[boxes.nobelt]\nseat_belt = "NO"\n'
+                                             '[absent]\nphone_position = "NO"\n'), SPACE)
+    photos = [Photo(tmp_path / "a.jpg", boxes=(Box("phone", (0, 0, 1, 1)), Box("belt", (0, 0, 1, 1)))),
+              Photo(tmp_path / "b.jpg", boxes=(Box("belt", (0, 0, 1, 1)), Box("nobelt", (0, 0, 1, 1)))),
+              Photo(tmp_path / "c.jpg", boxes=(Box("face", (0, 0, 1, 1)),))]
+    photo_set = PhotoSet(tmp_path, "yolo", photos)
+    with pytest.raises(InputError, match="b.jpg: its labels answer seat_belt both NO and YES"):
+        label_photos(photo_set, m)
+    labelled = label_photos(photo_set, m, skip_conflicts=True)
+    answers = {p.path.name: p.answers for p in labelled.photos}
+    assert answers == {"a.jpg": {"phone_position": "YES", "seat_belt": "YES"}, "b.jpg": {"phone_position": "NO"},
+                       "c.jpg": {"phone_position": "NO"}}
+    assert labelled.conflicts == {"seat_belt": 1} and labelled.unmapped == {"face": 1}
+
+
+# ---- scores: hard cases
+
+def test_balanced_accuracy_agrees_with_scikit_learn_and_the_majority_baseline():
+    from sklearn.metrics import balanced_accuracy_score
+    rng = np.random.default_rng(0)
+    truth = rng.choice(["YES", "NO"], 200, p=[0.8, 0.2])
+    said = np.where(rng.random(200) < 0.7, truth, rng.choice(["YES", "NO"], 200))
+    assert balanced_accuracy(truth, said) == pytest.approx(balanced_accuracy_score(truth, said))
+    always = score([Answer(t, "YES") for t in truth], ("YES", "NO"))
+    assert always["balanced_accuracy"] == pytest.approx(0.5)
+    assert always["accuracy"] == pytest.approx(always["majority_baseline"]["accuracy"])
+
+
+def test_scores_of_one_class_ties_and_nothing_answered():
+    one = score([Answer("YES", "YES"), Answer("YES", "NO")], ("YES", "NO"))
+    assert one["balanced_accuracy"] == 0.5 and one["auc"] is None and one["majority_baseline"]["balanced_accuracy"] == 1
+    tied = score([Answer("YES", "YES", 0.5), Answer("NO", "NO", 0.5)] * 3, ("YES", "NO"))
+    assert tied["auc"] == 0.5 and tied["balanced_accuracy"] == 1.0 and tied["balanced_accuracy_ci95"] == [1.0, 1.0]
+    silent = score([Answer("YES", None), Answer("NO", None)], ("YES", "NO"))
+    assert silent["accuracy"] is None and silent["unanswered"] == 2 and silent["said_counts"] == {"(unanswered)": 2}
+    garbage = score([Answer("YES", "MAYBE"), Answer("NO", "NO")], ("YES", "NO"))
+    assert garbage["confusion"]["labels"] == ["YES", "NO", "MAYBE"] and garbage["accuracy"] == 0.5
+
+
+def test_bootstrap_interval_is_seeded_and_holds_the_estimate():
+    answers = [Answer(t, s) for t, s in [("YES", "YES")] * 30 + [("YES", "NO")] * 10 + [("NO", "NO")] * 8
+               + [("NO", "YES")] * 12]
+    a, b = score(answers, ("YES", "NO"), seed=3), score(answers, ("YES", "NO"), seed=3)
+    assert a["balanced_accuracy_ci95"] == b["balanced_accuracy_ci95"]
+    low, high = a["balanced_accuracy_ci95"]
+    assert low < a["balanced_accuracy"] < high
+    assert a["recall"]["YES"]["rate"] == 0.75 and a["recall"]["NO"]["ci95"][0] < 0.4 < a["recall"]["NO"]["ci95"][1]
+
+
+# ---- the command, end to end on the shipped reference ISU
+
+def test_transfer_end_to_end_resumes_and_refuses_other_settings(class_set, tmp_path, capsys, few_torch_threads):
+    (class_set / "set" / "c0" / "broken.jpg").write_bytes(b"\xff\xd8 not a jpeg")
+    out = tmp_path / "t"
+    args = ["transfer", str(class_set / "set"), "--labels", str(class_set / "map.toml"), "--out", str(out)]
+    assert main(args) == 0
+    printed = capsys.readouterr().out
+    assert "phone_position" in printed and "renders (isu-blender" in printed
+    summary = json.loads((out / "summary.json").read_text())
+    phone = summary["sets"]["set"]["scores"]["phone_position"]
+    assert phone["n"] == 7 and phone["unanswered"] == 1          # the broken photo: an error, never a failure
+    assert phone["auc"] is not None and 0 <= phone["balanced_accuracy"] <= 1
+    assert summary["renders"]["scores"]["phone_position"]["n"] == 200   # the shipped model's held-out renders
+    assert summary["sets"]["set"]["scores"]["seat_belt"]["n"] == 4      # only c0 says the belt
+    lines = [json.loads(x) for x in (out / "answers.jsonl").read_text().splitlines()]
+    assert {x["set"] for x in lines} == {"set", "renders"}
+    assert "Wrong answers" in (out / "report.html").read_text() or phone["accuracy"] == 1.0
+    assert main(args) == 0                                       # the same again: every reply from the cache
+    again = [json.loads(x) for x in (out / "answers.jsonl").read_text().splitlines() if '"set": "set"' in x]
+    assert all(x["cached"] for x in again if not x["error"])
+    capsys.readouterr()
+    assert main(args + ["--limit", "2"]) == 2                    # another measurement: refused, nothing written
+    assert "made with other settings (limit: (default) then, 2 now)" in capsys.readouterr().err
+
+
+def test_transfer_escapes_what_the_labels_and_sut_said(tmp_path, few_torch_threads):
+    root = tmp_path / "set"
+    _save(root / "<script>x" / "a.jpg", _photos()[0])
+    m = _write_map(tmp_path, '[classes."<script>x"]\nphone_position = "YES"\n')
+    out = tmp_path / "t"
+    assert main(["transfer", str(root), "--labels", str(m), "--out", str(out)]) == 0
+    html = (out / "report.html").read_text()
+    assert "<script>x" not in html.replace("<script>window", "") and "&lt;script&gt;x" in html
