@@ -21,7 +21,7 @@ LEAVES = ("isu_validate.errors", "isu_validate.atomic", "isu_validate.srgb", "is
 # workflows: above the domain packages, below the command line
 WORKFLOWS = ("isu_validate.bench", "isu_validate.search", "isu_validate.pipeline", "isu_validate.execution",
              "isu_validate.analysis", "isu_validate.recreate", "isu_validate.agree", "isu_validate.replay",
-             "isu_validate.dataset", "isu_validate.yardstick")
+             "isu_validate.dataset", "isu_validate.yardstick", "isu_validate.transfer")
 
 
 def _modules() -> dict[str, Path]:
@@ -118,7 +118,8 @@ def test_leaves_import_nothing_of_the_project_but_its_errors():
 
 @pytest.mark.parametrize("domain", ["isu_validate.space", "isu_validate.render", "isu_validate.sut",
                                     "isu_validate.evaluate", "isu_validate.archive", "isu_validate.realism",
-                                    "isu_validate.reference", "isu_validate.recognition", "capture",
+                                    "isu_validate.reference", "isu_validate.recognition", "isu_validate.realphotos",
+                                    "capture",
                                     "style_transfer"])
 def test_domain_packages_do_not_import_workflows(domain):
     assert _edges([domain], WORKFLOWS) == []

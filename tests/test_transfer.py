@@ -167,9 +167,11 @@ def test_bootstrap_interval_is_seeded_and_holds_the_estimate():
 # ---- the command, end to end on the shipped reference ISU
 
 def test_transfer_end_to_end_resumes_and_refuses_other_settings(class_set, tmp_path, capsys, few_torch_threads):
-    (class_set / "set" / "c0" / "broken.jpg").write_bytes(b"\xff\xd8 not a jpeg")
+    import shutil
+    shutil.copytree(class_set / "set", tmp_path / "set")
+    (tmp_path / "set" / "c0" / "broken.jpg").write_bytes(b"\xff\xd8 not a jpeg")
     out = tmp_path / "t"
-    args = ["transfer", str(class_set / "set"), "--labels", str(class_set / "map.toml"), "--out", str(out)]
+    args = ["transfer", str(tmp_path / "set"), "--labels", str(class_set / "map.toml"), "--out", str(out)]
     assert main(args) == 0
     printed = capsys.readouterr().out
     assert "phone_position" in printed and "renders (isu-blender" in printed
@@ -198,3 +200,45 @@ def test_transfer_escapes_what_the_labels_and_sut_said(tmp_path, few_torch_threa
     assert main(["transfer", str(root), "--labels", str(m), "--out", str(out)]) == 0
     html = (out / "report.html").read_text()
     assert "<script>x" not in html.replace("<script>window", "") and "&lt;script&gt;x" in html
+
+
+# ---- recognise on real photographs without render labels
+
+def test_recognise_reads_a_labelled_real_set_beside_nothing_else(tmp_path, few_torch_threads):
+    from skimage import data
+    root = tmp_path / "yolo"
+    _save(root / "images" / "astronaut.jpg", data.astronaut(), (256, 256))
+    _save(root / "images" / "coffee.jpg", data.coffee(), (300, 200))
+    (root / "labels").mkdir()
+    (root / "labels" / "coffee.txt").write_text("0 0.5 0.5 0.6 0.8\n")     # the cup, labelled as a phone here
+    (root / "data.yaml").write_text("names: [phone]\n")
+    m = _write_map(tmp_path, '[boxes.phone]\nphone_position = "YES"\n[absent]\nphone_position = "NO"\n')
+    out = tmp_path / "rec"
+    assert main(["recognise", "--real", str(root), "--labels", str(m), "--out", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    rows = {r["measure"]: r for r in summary["rows"] if r["split"] == "all" and r["kind"] == "real"}
+    assert summary["frames"]["real_frames"] == 2
+    assert rows["face found"]["n"] == 2 and rows["face found"]["hits"] == 1     # the astronaut's, not the cup's
+    assert rows["any face read happy"]["n"] == 1 and rows["any face read happy"]["hits"] == 1
+    assert rows["phone top-5"]["n"] == 1                                        # read in its box
+    assert main(["recognise", "--labels", str(m), "--out", str(tmp_path / "r2")]) == 2   # --labels needs --real
+
+
+# ---- bench transfer
+
+def test_bench_transfer_recipes_parse_and_a_model_recipe_runs(class_set, tmp_path, capsys, few_torch_threads):
+    from isu_validate.bench.transfer import parse_recipe
+    assert parse_recipe("side=train:camera=cam.toml,n=50").options == {"camera": "cam.toml", "n": 50}
+    assert parse_recipe("r5=model:/m/r5,renders=/m/w/held-out").options == {"model": "/m/r5",
+                                                                            "renders": "/m/w/held-out"}
+    for bad, why in [("x", "must read NAME="), ("a=train:lens=3", "KEY one of"), ("a=train:n=many", "n must be int")]:
+        with pytest.raises(InputError, match=why):
+            parse_recipe(bad)
+    from isu_validate.reference.model import default_model_dir
+    out = tmp_path / "bench"
+    assert main(["bench", "transfer", str(class_set / "set"), "--labels", str(class_set / "map.toml"),
+                 "--recipe", f"shipped=model:{default_model_dir()}", "--out", str(out)]) == 0
+    table = capsys.readouterr().out
+    assert "shipped: model" in table and "real set" in table and "own held-out renders" in table
+    row = json.loads((out / "bench.json").read_text())[0]
+    assert row["scores"]["set"]["phone_position"]["n"] == 6 and row["scores"]["renders"]["phone_position"] == 1.0

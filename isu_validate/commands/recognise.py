@@ -22,8 +22,15 @@ def register(sub) -> None:
                     "intervals, split by preset and light; occluded features counted apart; a pairs folder's real "
                     "frames are measured beside the renders (the yardstick's own calibration). Writes summary.json, "
                     "frames.jsonl, contact sheets and index.html to --out.")
-    p.add_argument("sources", nargs="+", type=Path, metavar="SOURCE",
+    p.add_argument("sources", nargs="*", type=Path, metavar="SOURCE",
                    help="run folder, dataset folder, pairs folder, or folder of frames with <frame>.label.json")
+    p.add_argument("--real", action="append", default=[], metavar="SET",
+                   help="a labelled real photo set read beside the renders (class folders, YOLO, COCO, CSV; "
+                        "repeatable): faces found anywhere in the photo, expressions read, things in their boxes")
+    p.add_argument("--labels", metavar="MAP.toml",
+                   help="label map of the --real sets (the transfer command's): which box is a phone or a bottle, "
+                        "and what each photo's labels answer; without it only faces are read")
+    p.add_argument("--space", default="isu-paper", help="scene space of the label map (default isu-paper)")
     p.add_argument("--out", type=Path, required=True,
                    help="folder for the report (new, empty, or an earlier one of these sources)")
     p.add_argument("--limit", type=int, default=None, help="read only the first N frames of each source")
@@ -41,7 +48,10 @@ def run(args) -> int:
 
     if args.limit is not None and args.limit < 1:
         raise InputError(f"--limit must be 1 or more, got {args.limit}")
-    settings = RecogniseSettings(tuple(str(s) for s in args.sources), args.limit)
+    if args.labels and not args.real:
+        raise InputError("--labels maps the labels of --real sets: give --real SET too")
+    settings = RecogniseSettings(tuple(str(s) for s in args.sources), args.limit, tuple(args.real), args.labels,
+                                 args.space)
     summary = recognise(settings, args.out, resolve_torch_device(args.device), overwrite=args.overwrite)
     for split in ("all", *args.by):
         print(format_table(summary, split))

@@ -47,6 +47,7 @@ class Frame:
     own_boxes: bool = True          # False: the boxes are the aligned sim frame's (a real photograph)
     boxes_size: tuple[int, int] | None = None       # (w, h) of the image the boxes were measured on
     up: dict = field(default_factory=dict)          # instance -> (dx, dy): where its top points (a unit vector)
+    face_anywhere: bool = False     # no head box (a labelled real photograph): the most confident face counts
 
     def boxes_for(self, width: int, height: int) -> dict:
         """The boxes in a (width x height) image: a real frame may be shot larger than the sim frame."""
@@ -79,7 +80,8 @@ class Frame:
         for unit in UNITS:
             if unit.present and self.scene.get(unit.present[0]) not in unit.present[1]:
                 continue
-            hidden = unit.feature in self.occluded or unit.instance not in self.boxes
+            boxless = unit.instance not in self.boxes and not (unit.name == "face" and self.face_anywhere)
+            hidden = unit.feature in self.occluded or boxless
             out.append((unit, "occluded" if hidden else "visible"))
         return out
 

@@ -39,6 +39,9 @@ MEASURES = {
     "face found": (_is("face"), lambda it: it["found"]),
     "HAPPY read happy": (_is("face", "HAPPY"), _read_as("HAPPY")),
     "SERIOUS read not happy": (_is("face", "SERIOUS"), _read_as("SERIOUS")),
+    # any face, its expression unlabelled (a real photograph): how often it reads happy, beside the renders'
+    "any face read happy": (_is("face"), lambda it: it["expression"]["read"] == "happy" if it.get("expression")
+                            else None),
     "phone top-1": (_is("phone"), lambda it: it["top1"]),
     "phone top-5": (_is("phone"), lambda it: it["top5"]),
     "bottle top-1": (_is("bottle"), lambda it: it["top1"]),

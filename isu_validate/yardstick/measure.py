@@ -18,7 +18,8 @@ from ..recognition.frames import KINDS, Frame
 from ..recognition.objects import PLAUSIBLE
 from ..recognition.read import Yardsticks, read_frame
 from ..recognition.tally import expression_summary, face_sizes, object_summary, rows
-from .sources import frames_of
+from ..errors import InputError
+from .sources import frames_of, real_set_frames
 
 FORMAT = "isu-validate-recognise/1"
 SUMMARY, FRAMES = "summary.json", "frames.jsonl"
@@ -29,17 +30,32 @@ SHEET_CROPS = 96     # crops per contact sheet: enough to see the pattern, small
 class RecogniseSettings:
     sources: tuple[str, ...]
     limit: int | None = None       # first N frames of each source (None: all)
+    real: tuple[str, ...] = ()     # labelled real photo sets (realphotos layouts), read beside the renders
+    labels: str | None = None      # their label map (boxes of the things, answers); None: faces only
+    space: str = "isu-paper"       # the label map's space
 
     def as_dict(self) -> dict:
-        return {"sources": list(self.sources), "limit": self.limit}
+        out = {"sources": list(self.sources), "limit": self.limit}
+        if self.real:   # only when given: earlier folders' settings stay comparable
+            out.update(real=[str(Path(r).resolve()) for r in self.real], labels=self.labels, space=self.space)
+        return out
 
 
 def gather(settings: RecogniseSettings) -> tuple[list[dict], list[Frame]]:
     described, frames = [], []
-    for i, raw in enumerate(settings.sources):
-        kind, found = frames_of(Path(raw))
+    sources = [(raw, lambda raw=raw: frames_of(Path(raw))) for raw in settings.sources]
+    if settings.real:
+        from ..space import load_space
+        space = load_space(settings.space)
+        labels = Path(settings.labels) if settings.labels else None
+        sources += [(raw, lambda raw=raw: ("real photos", real_set_frames(Path(raw), labels, space)))
+                    for raw in settings.real]
+    if not sources:
+        raise InputError("give a SOURCE (run, dataset, pairs, frames) or --real SET to read")
+    for i, (raw, read) in enumerate(sources):
+        kind, found = read()
         found = found[: settings.limit] if settings.limit else found
-        prefix = f"{i}:" if len(settings.sources) > 1 else ""
+        prefix = f"{i}:" if len(sources) > 1 else ""
         frames += [replace(f, name=prefix + f.name) for f in found]
         described.append({"path": str(Path(raw).resolve()), "kind": kind, "frames": len(found)})
     return described, frames

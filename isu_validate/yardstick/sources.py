@@ -17,7 +17,7 @@ from ..dataset.folder import DatasetDir
 from ..errors import InputError, InputNotFound
 from ..image_files import IMAGE_SUFFIXES
 from ..pairs import PairsDir
-from ..recognition.frames import Frame
+from ..recognition.frames import UNITS, Frame
 from ..render.labels import INSTANCES
 from ..render.outputs import by_product
 
@@ -137,3 +137,34 @@ def _read_label(path: Path) -> dict:
     if not isinstance(label, dict) or "scene" not in label:
         raise InputError(f"{path} is not a render label (no 'scene'); `isu-validate render` writes them")
     return label
+
+
+def real_set_frames(root: Path, labels: Path | None, space, layout: str | None = None) -> list[Frame]:
+    """A labelled real photo set (``realphotos``: class folders, YOLO, COCO, CSV) as frames of kind ``real``.
+    Without a label map every photo is read for a face only (anywhere in it: no head box). With one, each
+    photo's scene holds a value for every answer its labels give (phone in hand YES -> P1, so the phone is
+    looked for), and a box class that says a thing is there is that thing's box (a phone, a bottle)."""
+    from ..realphotos import label_photos, load_label_map, read_photo_set
+
+    photo_set = read_photo_set(root, layout)
+    if labels is None:
+        return [Frame(p.path, f"{root.name}/{p.path.name}", "real", None, {}, face_anywhere=True)
+                for p in photo_set.photos]
+    label_map = load_label_map(labels, space)
+    frames = []
+    for photo in label_photos(photo_set, label_map, skip_conflicts=True).photos:
+        scene = {f: _value_for(space.features[f], answer) for f, answer in photo.answers.items()}
+        boxes = {}
+        for box in photo.boxes:
+            for feature in label_map.boxes.get(box.label, {}):
+                unit = next((u for u in UNITS if u.feature == feature and u.present), None)
+                if unit and scene.get(feature) in unit.present[1]:
+                    boxes.setdefault(unit.instance, box.xyxy)
+        frames.append(Frame(photo.path, f"{root.name}/{photo.path.name}", "real", None, scene, boxes,
+                            face_anywhere=True))
+    return frames
+
+
+def _value_for(feature, answer: str) -> str:
+    """The first value of ``feature`` whose true answer is ``answer`` (a label says YES, a scene says P1)."""
+    return next((str(v) for v in feature.values if feature.truth(v) == answer), answer)
