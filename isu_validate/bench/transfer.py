@@ -131,8 +131,9 @@ def _train(recipe: Recipe, folder: Path, args) -> tuple[Path, Path, str]:
 def _measure(args, recipe: Recipe, model: Path, renders: Path | None, out: Path) -> dict:
     from ..transfer import TransferSettings, measure_transfer
 
+    space = json.loads((model / "heads.json").read_text()).get("space", args.space)   # the space it was trained in
     settings = TransferSettings(tuple(args.real), tuple(args.labels), "reference", {"model_dir": str(model)},
-                                args.space, str(renders) if renders else None, args.layout, args.skip_conflicts,
+                                space, str(renders) if renders else None, args.layout, args.skip_conflicts,
                                 args.limit, seed=args.seed, device=args.device)
     print(f"bench transfer: measuring recipe {recipe.name}", file=sys.stderr)
     return measure_transfer(settings, out)
