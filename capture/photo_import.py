@@ -86,10 +86,10 @@ def read_photo(path: Path) -> Photo:
     sub = exif.get_ifd(_EXIF_IFD)
     tag = lambda key: sub.get(key, exif.get(key))   # noqa: E731 (some writers put Exif tags in IFD0)
     exposure_s, iso = _number(tag(_EXPOSURE_TIME)), _number(tag(_ISO))
-    mode, program = _number(tag(_MODE)), _number(tag(_PROGRAM))
-    auto = _MODES.get(int(mode)) if mode is not None else None
+    mode, program = _code(tag(_MODE)), _code(tag(_PROGRAM))
+    auto = _MODES.get(mode) if mode is not None else None
     if auto is None and program is not None:
-        auto = _PROGRAMS.get(int(program), True)
+        auto = _PROGRAMS.get(program, True)
     return Photo(path, width, height, exposure_s * 1e6 if exposure_s else None, iso or None,
                  _number(tag(_F_NUMBER)) or None, _number(tag(_FOCAL)) or None, _number(tag(_FOCAL_35)) or None,
                  _text(exif.get(_MAKE)), _text(exif.get(_MODEL)), _time(tag(_TAKEN) or exif.get(_DATETIME),
@@ -110,6 +110,14 @@ def _number(value) -> float | None:
     except (TypeError, ValueError, ZeroDivisionError):
         return None
     return v if v == v and v > 0 else None    # NaN (a 0/0 rational) and 0 mean "not recorded"
+
+
+def _code(value) -> int | None:
+    """An EXIF enumeration (0 is a value here, unlike for the measured fields)."""
+    try:
+        return int(value)
+    except (TypeError, ValueError):
+        return None
 
 
 def _text(value) -> str:
