@@ -258,25 +258,27 @@ def import_photos(items, out: str | Path, exposure_us=None, iso: float | None = 
     result = ImportResult(out)
     groups = {"": sorted(photos, key=lambda p: (p.taken or "", p.path.name))} if rename else {
         f"set_{i:02d}": g for i, g in enumerate(bursts(photos, gap_s), 1)}
-    for folder, group in groups.items():
-        _check_names(group, rename)
-        target = out / folder
-        target.mkdir(parents=True, exist_ok=True)
-        frames = []
-        for i, photo in enumerate(group):
-            name = f"{rename}{first_index + i:04d}{photo.path.suffix.lower()}" if rename else photo.path.name
-            frame = target / name
-            if frame.exists():
-                raise ImportFailed(f"{frame} already exists; import into a new --out folder")
+    plan = {folder: [(photo, out / folder / (f"{rename}{first_index + i:04d}{photo.path.suffix.lower()}" if rename
+                                             else photo.path.name)) for i, photo in enumerate(group)]
+            for folder, group in groups.items()}
+    for folder, frames in plan.items():       # every clash is found before anything is written
+        _check_names(groups[folder], rename)
+        taken = [str(frame) for _, frame in frames if frame.exists() or frame.with_suffix(".json").exists()]
+        if taken:
+            raise ImportFailed(f"{taken[0]} already exists; import into a new --out folder")
+    for folder, frames in plan.items():
+        (out / folder).mkdir(parents=True, exist_ok=True)
+        for i, (photo, frame) in enumerate(frames):
             shutil.copyfile(photo.path, frame)           # the camera's bytes, unchanged
-            write_text(frame.with_suffix(".json"), json.dumps(sidecar(photo, name, first_index + i), indent=2))
-            frames.append(frame)
-        result.folders[folder] = frames
+            write_text(frame.with_suffix(".json"), json.dumps(sidecar(photo, frame.name, first_index + i), indent=2))
+        result.folders[folder] = [frame for _, frame in frames]
         if not rename:
             from .camera import camera_from_dict, write_toml
-            tables, _ = nominal_camera(group[0], f"{group[0].camera} {folder}")   # no [extrinsics]: unregistered
-            result.cameras[folder] = write_toml(camera_from_dict(tables, str(target / "camera.toml")),
-                                                target / "camera.toml", "isu-validate capture import")
+            first = frames[0][0]
+            tables, _ = nominal_camera(first, f"{first.camera} {folder}")   # no [extrinsics]: unregistered
+            camera = out / folder / "camera.toml"
+            result.cameras[folder] = write_toml(camera_from_dict(tables, str(camera)), camera,
+                                                "isu-validate capture import")
     if any(p.auto_exposure is None for p in photos):
         result.notes.append("some photos' EXIF records neither ExposureMode nor ExposureProgram: they were taken as "
                             "manual exposures (a bracket); re-import with --auto-exposure if the camera chose them")

@@ -125,20 +125,30 @@ def test_raw_corrupt_and_clashing_photos_are_refused_before_anything_is_written(
     with pytest.raises(ImportFailed, match="have the same name and belong to one burst"):
         import_photos([tmp_path / "a", tmp_path / "b"], tmp_path / "out")
     assert not (tmp_path / "out").exists()
+    import_photos([tmp_path / "a"], tmp_path / "out")
+    before = sorted(p.name for p in (tmp_path / "out").rglob("*"))
+    with pytest.raises(ImportFailed, match=r"set_01/same.jpg already exists; import into a new --out folder"):
+        import_photos([tmp_path / "a"], tmp_path / "out")                  # a second import: nothing overwritten
+    assert sorted(p.name for p in (tmp_path / "out").rglob("*")) == before
     with pytest.raises(Exception, match="does not exist"):
         import_photos([tmp_path / "nothing.jpg"], tmp_path / "out")
 
 
-def test_import_into_a_pair_numbers_on_after_the_frames_there(tmp_path, capsys):
-    from tests.pairs_kit import make_sample
-    sample = make_sample(tmp_path / "pairs", "S01", [False])
+def test_phone_photos_imported_into_a_pair_reach_agree_as_real_frames(tmp_path, capsys):
+    from tests.pairs_kit import TRUTH, WRONG, fixed_sut, make_sample, space_file
+    sample = make_sample(tmp_path / "pairs", "S01", [True])          # a stand-in taken before
     photo(tmp_path / "p.jpg", 1 / 30, 800, "2026:01:01 00:00:00", mode=0)
     assert main(["capture", "import", str(tmp_path / "p.jpg"), "--pair", str(sample)]) == 0
     meta = json.loads((sample / "real" / "frame_0001.json").read_text())
     assert meta["frame"] == "frame_0001.jpg" and meta["iso"] == 800 and not (sample / "real" / "camera.toml").exists()
-    from isu_validate.pairs import PairsDir
-    assert PairsDir(tmp_path / "pairs").sample(sample).provenance().counts() == {"stand_in_frames": 0,
-                                                                                  "real_frames": 2}
+    sut = fixed_sut(tmp_path, {"S01/sim.png": TRUTH, "S01/real/frame_0000.png": TRUTH,
+                               "S01/real/frame_0001.jpg": WRONG})
+    out = tmp_path / "agree"
+    assert main(["agree", str(tmp_path / "pairs"), "--sut", sut, "--space", str(space_file(tmp_path)), "--out",
+                 str(out), "--no-realism", "--repeats", "1"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert (summary["stand_in_frames"], summary["real_frames"]) == (1, 1)   # the photo counts as a real capture
+    assert summary["by_provenance"]["real"]["agreement_rate"] == 0.0
 
 
 # --------------------------------------------------------------------------- a chart the user points at
@@ -180,3 +190,29 @@ def test_a_small_tilted_chart_no_detector_finds_is_read_where_the_user_points(tm
     assert report["de2000_after"]["mean"] < 3 < report["de2000_before"]["mean"]
     with pytest.raises(Exception, match="reaches outside the 640x480 frame"):
         chart.find(real, "auto", "small.png", chart.parse_box("600,400,80,60"))
+
+
+def test_exposure_chart_poses_the_virtual_chart_where_the_user_points(tmp_path):
+    """``exposure chart --chart-box``: the chart's pose in the cabin from the box, as from a detection."""
+    import cv2
+    from capture.camera_model import virtual_chart
+    rig = load_camera("default")
+    pitch = virtual_chart.DEFAULT_PITCH_M
+    texture = virtual_chart.texture()
+    th, tw = texture.shape[:2]
+    m_per_px = pitch / (virtual_chart.PATCH_PX + virtual_chart.GAP_PX)
+    R_cam, t_cam = np.eye(3), np.array([-0.12, -0.08, 0.9])            # facing the camera, 0.9 m away
+
+    def to_image(px):    # texture pixels -> frame pixels through the rig's lens
+        board = np.column_stack([np.asarray(px, float) * m_per_px, np.zeros(len(px))])
+        return rig.project_camera(board @ R_cam.T + t_cam)
+
+    outline = to_image([[0, 0], [tw, 0], [tw, th], [0, th]])
+    hom = cv2.getPerspectiveTransform(np.float32([[0, 0], [tw, 0], [tw, th], [0, th]]), np.float32(outline))
+    frame = cv2.warpPerspective(texture, hom, (rig.width, rig.height), borderValue=(90, 90, 90))
+    g = virtual_chart.GAP_PX
+    corners = to_image([[g, g], [tw - g, g], [tw - g, th - g], [g, th - g]])
+    R, t, how = virtual_chart.locate(frame, rig, pitch, box=corners)
+    assert how == "box"
+    np.testing.assert_allclose(t, rig.R @ t_cam + rig.t, atol=0.01)     # within 1 cm at 0.9 m
+    assert np.degrees(np.arccos(np.clip((np.trace(R.T @ rig.R @ R_cam) - 1) / 2, -1, 1))) < 2
