@@ -21,7 +21,7 @@ OPENCV_FLAGS = {"pinhole": "CALIB_FIX_K1|K2|K3|ZERO_TANGENT_DIST", "opencv8": "C
 
 
 def register_bench(sub) -> None:
-    p = sub.add_parser("real", help="real photographs: calibration, response and colour beside OpenCV and "
+    p = sub.add_parser("real", help="real photographs: calibration, response, colour beside OpenCV and "
                                     "colour-science on the same photos")
     p.add_argument("--charuco", type=Path, help="folder of ChArUco photos")
     p.add_argument("--board", help="their board spec (charuco:COLSxROWS:SQUARE_M:MARKER_M:DICT)")
