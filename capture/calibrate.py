@@ -31,6 +31,7 @@ class CalibrationResult:
     skipped: list[tuple[str, str]] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
     timings: dict = field(default_factory=dict)
+    undetermined: str | None = None      # why the views do not determine the intrinsics (None: they do)
 
 
 def detect_images(paths, spec: BoardSpec, progress=None) -> tuple[list[Detection], list[tuple[str, str]]]:
@@ -89,11 +90,17 @@ def calibrate(detections: list[Detection], model: str, *, board: BoardSpec | Non
     t_cv = time.perf_counter() - t0 - t_solve - t_unc
     cv_stats = crossval.stats() if crossval else None
     warnings = checks.data_warnings(sol, usum, cv_stats)
+    intervals = checks.intrinsics_intervals(sol)
+    undetermined = checks.undetermined_intrinsics(sol, intervals)
+    if undetermined:
+        warnings.insert(0, undetermined)
     if cross_validate and crossval is None:
         warnings.append(f"cross-validation skipped: it needs at least {2 * MIN_FRAMES_PER_HALF} frames")
     timings = {"solve_s": t_solve, "uncertainty_s": t_unc, "cross_validation_s": t_cv}
     camera = _camera(name, sol, usum, cv_stats, warnings, board, skipped, working_distance_m, outlier_sigma)
-    return CalibrationResult(camera, sol, umap, crossval, halves, list(skipped), warnings, timings)
+    camera.quality["intrinsics_95"] = {k: v["interval_95"] for k, v in intervals.items()}
+    camera.quality["intrinsics_determined"] = undetermined is None
+    return CalibrationResult(camera, sol, umap, crossval, halves, list(skipped), warnings, timings, undetermined)
 
 
 def _cross_validate(sol: Solution, outlier_sigma: float, distance_m: float):

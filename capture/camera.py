@@ -347,8 +347,8 @@ def require_registered(rig: Camera, role: str = "the camera") -> None:
 
 
 # ---------------------------------------------------------------------- writing
-def write_toml(camera: Camera, path: str | os.PathLike) -> Path:
-    header = ("# Camera file written by isu-validate calibrate (layout: capture/camera.py).\n"
+def write_toml(camera: Camera, path: str | os.PathLike, by: str = "isu-validate calibrate") -> Path:
+    header = (f"# Camera file written by {by} (layout: capture/camera.py).\n"
               "# Cabin frame: metres, x forward, y left, z up. rotation = R_cabin_from_camera.\n")
     return write_text(path, header + tomli_w.dumps(camera.to_dict()))   # whole or not at all
 

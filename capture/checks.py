@@ -11,6 +11,12 @@ MIN_FRAMES = 10
 MIN_TILT_DEG = 15.0       # below this every view is effectively fronto-parallel
 MIN_PERSPECTIVE = 0.08    # the same, as depth variation across the board (10 deg already gives ~0.1)
 EDGE_BAND = 0.12          # the outer 12% of the image on each side counts as "near the edge"
+# The intrinsics count as determined when their 95% intervals are narrower than these, relative to the focal
+# length (fx, fy) or to the image width/height (cx, cy): a 2% focal error already moves an image-corner point
+# ~2% of the half-diagonal (~8 px at 640x480). Good calibrations reach ~0.1-0.3%; four phone views of one
+# board reached 20-30% (OpenCV's tutorial photos).
+DETERMINED_95 = 0.02
+Z95 = 1.959964
 
 
 def frame_tilts_deg(sol: Solution) -> np.ndarray:
@@ -68,6 +74,36 @@ def edge_coverage(sol: Solution) -> dict:
     bx, by = EDGE_BAND * w, EDGE_BAND * h
     return {"left": bool(np.any(pts[:, 0] < bx)), "right": bool(np.any(pts[:, 0] > w - 1 - bx)),
             "top": bool(np.any(pts[:, 1] < by)), "bottom": bool(np.any(pts[:, 1] > h - 1 - by))}
+
+
+def intrinsics_intervals(sol: Solution) -> dict:
+    """fx, fy, cx, cy: value, standard deviation and 95% interval from the parameter covariance (None when the
+    solve left them undetermined: an infinite interval)."""
+    cov = sol.intrinsics_covariance
+    out = {}
+    for i, name in enumerate(("fx", "fy", "cx", "cy")):
+        value = float(sol.intrinsics[i])
+        sd = float(np.sqrt(max(cov[i, i], 0.0))) if cov is not None else float("inf")
+        out[name] = {"value": value, "stdev": sd, "interval_95": [value - Z95 * sd, value + Z95 * sd]}
+    return out
+
+
+def undetermined_intrinsics(sol: Solution, intervals: dict | None = None) -> str | None:
+    """Why the views do not determine the intrinsics themselves (parameters, not projections), with the
+    95% intervals; None when they do."""
+    intervals = intervals or intrinsics_intervals(sol)
+    w, h = sol.image_size
+    scale = {"fx": intervals["fx"]["value"], "fy": intervals["fy"]["value"], "cx": w, "cy": h}
+    loose = [k for k, v in intervals.items() if not Z95 * v["stdev"] <= DETERMINED_95 * abs(scale[k])]
+    if not loose:
+        return None
+    shown = ", ".join(f"{k} {v['value']:.1f} (95%: {v['interval_95'][0]:.1f} to {v['interval_95'][1]:.1f})"
+                      if np.isfinite(v["stdev"]) else f"{k} {v['value']:.1f} (undetermined)"
+                      for k, v in intervals.items())
+    return (f"the views do not determine the intrinsics: {shown}; the 95% interval of {', '.join(loose)} is "
+            f"wider than +-{DETERMINED_95:.0%} (of the focal length for fx, fy; of the image width, height for cx, "
+            f"cy). Add views ({MIN_FRAMES}+ recommended, 20-40 best), tilted by 30-45 deg in several "
+            "directions and covering the image's corners")
 
 
 def data_warnings(sol: Solution, uncertainty: dict | None = None, crossval: dict | None = None) -> list[str]:

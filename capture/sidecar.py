@@ -1,6 +1,7 @@
 """A captured frame's sidecar (``frame_0000.json`` beside ``frame_0000.png``): read here, and nowhere else.
 
-``capture shoot`` writes it (``session.py``): device, exposure time, ISO/gain, time; a frame of the
+``capture shoot`` writes it (``session.py``): device, exposure time, ISO/gain, time; ``capture import``
+writes the same from a photo's EXIF (``photo_import.py``); a frame of the
 stand-in source (``sources/standin.py``: a render made where no car or camera was at hand) carries
 ``"stand_in": true``. Every report that takes captured frames for reality counts its stand-ins with
 ``provenance`` and says so (``banner``): a number measured on renders must never read like a

@@ -1,7 +1,9 @@
 """The ColorChecker 24: its reference colours, a virtual chart, detection in a frame, patch sampling.
 
 Two detectors find the chart: OpenCV's ``mcc`` (contrib) and colour-science's
-``colour-checker-detection`` (segmentation). Both give the 24 patch outlines in the frame; the same
+``colour-checker-detection`` (segmentation); where both fail (a small or tilted chart, a Passport),
+the user points at it (``--chart-box``: a box or four corners around the 24 patches, ``box_quads``).
+Each gives the 24 patch outlines in the frame; the same
 sampler then takes each patch's mean colour from its central part and drops the patches that fall
 outside the frame or are clipped (saturated or crushed to black), saying how many and why."""
 from __future__ import annotations
@@ -18,6 +20,10 @@ DETECTORS = ("mcc", "ccd")
 PATCHES, COLUMNS, ROWS = 24, 6, 4
 NEUTRALS = slice(18, 24)          # white ... black, the bottom row
 INNER = 0.55                      # share of a patch's width sampled (away from its edges and blur)
+GAP_RATIO = 0.15                  # gap between patches / patch width (Classic ~0.11, Passport ~0.2): a box
+                                  # around the patches is cut into 6 x 4 patches with such gaps
+BOX_HELP = ("X,Y,W,H (pixels: the rectangle around the 24 patches, dark skin at the top left) or "
+            "X1,Y1,X2,Y2,X3,Y3,X4,Y4 (the patch area's corners: dark skin, bluish green, black, white)")
 CLIPPED_SHARE = 0.05              # a patch with more than this share of clipped pixels is dropped
 HIGH, LOW = 250 / 255, 3 / 255
 
@@ -109,6 +115,47 @@ def _ccd(image_rgb8: np.ndarray) -> np.ndarray | None:
     return np.asarray(quads, dtype=np.float64)
 
 
+def parse_box(text: str) -> np.ndarray:
+    """``--chart-box`` as the four corners (4, 2) of the patch area: top left (dark skin) clockwise."""
+    try:
+        v = [float(x) for x in text.replace(" ", "").split(",")]
+    except ValueError:
+        v = []
+    if len(v) == 4 and v[2] > 0 and v[3] > 0:
+        x, y, w, h = v
+        return np.array([[x, y], [x + w, y], [x + w, y + h], [x, y + h]])
+    if len(v) == 8:
+        corners = np.array(v).reshape(4, 2)
+        if abs(cv2.contourArea(corners.astype(np.float32))) > 0:
+            return corners
+    raise InputError(f"--chart-box {text!r}: expected {BOX_HELP}")
+
+
+def box_quads(corners: np.ndarray) -> np.ndarray:
+    """The 24 patch outlines (24, 4, 2) inside the patch area whose corners the user gave (perspective
+    through the four corners: a tilted chart is followed)."""
+    pitch = 1.0 + GAP_RATIO
+    width, height = COLUMNS * pitch - GAP_RATIO, ROWS * pitch - GAP_RATIO
+    area = np.float32([[0, 0], [width, 0], [width, height], [0, height]])
+    H = cv2.getPerspectiveTransform(area, np.float32(corners))
+    quads = []
+    for i in range(PATCHES):
+        r, c = divmod(i, COLUMNS)
+        x, y = c * pitch, r * pitch
+        square = np.float32([[[x, y], [x + 1, y], [x + 1, y + 1], [x, y + 1]]])
+        quads.append(cv2.perspectiveTransform(square, H)[0])
+    return np.asarray(quads, dtype=np.float64)
+
+
+def pointed(image_rgb8: np.ndarray, corners: np.ndarray, where: str) -> Detection:
+    """The chart where the user pointed (``--chart-box``); InputError when the box leaves the frame."""
+    h, w = image_rgb8.shape[:2]
+    if corners.min() < 0 or corners[:, 0].max() > w or corners[:, 1].max() > h:
+        raise InputError(f"{where}: --chart-box reaches outside the {w}x{h} frame "
+                         f"({np.round(corners, 1).tolist()})")
+    return Detection("box", box_quads(corners))
+
+
 def sample(image01: np.ndarray, quads: np.ndarray) -> Patches:
     """Mean colour of each patch's centre; patches outside the frame or clipped are dropped."""
     h, w = image01.shape[:2]
@@ -152,9 +199,13 @@ def _fit_error(linear: np.ndarray, usable: np.ndarray) -> float:
     return float(np.mean((x * gains - ref) ** 2)) if usable.any() else np.inf
 
 
-def find(image_rgb8: np.ndarray, detector: str = "auto", where: str = "frame") -> Detection:
+def find(image_rgb8: np.ndarray, detector: str = "auto", where: str = "frame",
+         box: np.ndarray | None = None) -> Detection:
     """Detect with one detector, or with ``auto``: mcc first (found charts more often and ~10x faster in
-    ``bench exposure``), colour-checker-detection when mcc finds nothing."""
+    ``bench exposure``), colour-checker-detection when mcc finds nothing; ``box`` (corners from
+    ``parse_box``): where the user pointed, no detector."""
+    if box is not None:
+        return pointed(image_rgb8, box, where)
     order = DETECTORS if detector == "auto" else (detector,)
     if detector not in DETECTORS + ("auto",):
         raise InputError(f"unknown chart detector {detector!r}; use auto, mcc or ccd")
@@ -164,4 +215,4 @@ def find(image_rgb8: np.ndarray, detector: str = "auto", where: str = "frame") -
             return found
     raise ChartNotFound(f"{where}: no ColorChecker 24 found (tried {', '.join(order)}). Reshoot with the whole "
                         "chart in the frame, facing the camera, at least ~1/6 of the frame wide, evenly lit and "
-                        "not overexposed")
+                        "not overexposed; or point at the chart you see: --chart-box " + BOX_HELP)

@@ -36,9 +36,11 @@ def read_rgb8(path: str | Path) -> np.ndarray:
     return cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
 
 
-def read_real(path: str | Path, response: Response | None, detector: str = "auto") -> ChartReading:
+def read_real(path: str | Path, response: Response | None, detector: str = "auto",
+              box: np.ndarray | None = None) -> ChartReading:
+    """The chart in a real frame: found by ``detector``, or where ``box`` (``chart.parse_box``) says."""
     image = read_rgb8(path)
-    found = chart.find(image, detector, str(path))
+    found = chart.find(image, detector, str(path), box)
     to_linear = response.to_linear if response is not None else srgb_decode
     _, patches = chart.oriented(found.quads, chart.sample(image.astype(np.float32) / 255.0, found.quads), to_linear)
     return ChartReading(str(path), found.detector, patches, to_linear(patches.colours), found.seconds)

@@ -1,6 +1,7 @@
 """Captured frames with their sidecars, as the fits need them; unusable frames are set aside with a reason.
 
-A sidecar is the JSON ``capture shoot`` writes beside each frame (``frame_0000.json``): ``exposure_us``,
+A sidecar is the JSON ``capture shoot`` writes beside each frame (``frame_0000.json``), or ``capture import``
+from a photo's EXIF (``capture/photo_import.py``): ``exposure_us``,
 ``iso`` (DepthAI; gain = ISO / 100) or ``gain`` (V4L2's raw gain, taken as a multiplier),
 ``auto_exposure``, and ``timestamp``/``sequence`` when the source reports them."""
 from __future__ import annotations
@@ -87,8 +88,9 @@ def _load_one(path: Path, group: str) -> tuple[Frame | None, str]:
     try:
         meta = load_sidecar(path)
     except FileNotFoundError:
-        return None, (f"no sidecar {sidecar.name} (exposure time and ISO/gain unknown; "
-                      "shoot with `isu-validate capture shoot`)")
+        return None, (f"no sidecar {sidecar.name} (exposure time and ISO/gain unknown; shoot with "
+                      "`isu-validate capture shoot`, or make sidecars from photos' EXIF with "
+                      "`isu-validate capture import PHOTOS --out DIR`)")
     except ValueError as exc:
         return None, f"sidecar {sidecar.name} is not valid JSON ({exc})"
     exposure_us, gain = meta.get("exposure_us"), _gain(meta)

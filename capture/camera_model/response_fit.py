@@ -66,7 +66,7 @@ def fit_response(frames: list[Frame], smoothing: float = 15.0, samples: int = 10
         crfs = camera_response_functions_Debevec1997(stack, sampling_function=samples_flat_blocks,
                                                      sampling_function_kwargs={"samples": samples}, l_s=smoothing,
                                                      extrapolating_function=None, n=CODES, normalise=False)
-    linear = _monotonic(_extend_ends(np.asarray(crfs, dtype=float)))
+    linear = finish_curve(np.asarray(crfs, dtype=float))
     response = Response(linear)
     residual = bracket_residual(response, stack_frames)
     fit = {"method": "Debevec 1997 (colour-hdri g_solve), flat-block sampling", "smoothing": smoothing,
@@ -94,6 +94,12 @@ def samples_flat_blocks(data: np.ndarray, samples: int = 1000, block: int = 6, s
     pick = np.unique(np.concatenate([pick, rng.choice(keep, min(len(keep), samples // 4), replace=False)]))
     codes = np.rint(means.reshape(hb * wb, channels, n)[pick] * (CODES - 1))
     return np.transpose(codes, (0, 2, 1))
+
+
+def finish_curve(solved: np.ndarray) -> np.ndarray:
+    """A solved inverse response (256, 3) as the camera file keeps it: ends extended, rising, 1 at code 255
+    (what any Debevec solver gives, colour-hdri's or OpenCV's, becomes comparable)."""
+    return _monotonic(_extend_ends(solved))
 
 
 RELIABLE = (32, 224)      # codes the hat weighting leaves well determined; beyond, power-law extrapolation

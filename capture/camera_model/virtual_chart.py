@@ -46,10 +46,10 @@ def chart_pose(rig, centres_px: np.ndarray, pitch_m: float) -> tuple[np.ndarray,
 
 
 def locate(image: np.ndarray, rig, pitch_m: float, detector: str = "auto",
-           where: str = "") -> tuple[np.ndarray, np.ndarray, str]:
-    """(R_cabin_from_board, board origin, the detector that found it) of the chart in an RGB frame (8-bit)
-    taken by the camera ``rig``."""
-    found = chart.find(image, detector, where)
+           where: str = "", box: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, str]:
+    """(R_cabin_from_board, board origin, the detector that found it, or "box" where the user pointed) of the
+    chart in an RGB frame (8-bit) taken by the camera ``rig``."""
+    found = chart.find(image, detector, where, box)
     quads, _ = chart.oriented(found.quads, chart.sample(image.astype(np.float32) / 255.0, found.quads), srgb_decode)
     R, t = chart_pose(rig, quads.mean(axis=1), pitch_m)
     return R, t, found.detector

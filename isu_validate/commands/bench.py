@@ -23,6 +23,7 @@ BENCHES = {
     "exposure": "imaging model: fit error against known cameras, apply time, chart detectors",
     "dataset": "dataset: images/s with masks, and COCO masks against a re-render",
     "augment": "the fix loop: focused vs uniform data, retrain the reference ISU, replay",
+    "real": "real photographs: calibration, response, colour beside OpenCV and colour-science on the same photos",
     "recognise": "render seconds per frame against photo-trained models' recognition rates, per preset",
     "transfer": "recipes of training renders, judged on labelled real photos",
 }

@@ -37,6 +37,8 @@ def register(sub) -> None:
     p.add_argument("--working-distance", type=float, default=1.0, help="metres, for the uncertainty (default 1)")
     p.add_argument("--outlier-sigma", type=float, default=4.0, help="reject corners beyond this many sigmas")
     p.add_argument("--no-cross-validation", action="store_true")
+    p.add_argument("--force", action="store_true",
+                   help="write the camera file even when the views do not determine the intrinsics")
     p.add_argument("--extrinsics-from", metavar="RIG", help="copy the cabin pose from this camera rig")
     p.add_argument("--markers", help="marker table (TOML file, or a shipped name such as 'example') for 'register', "
                                      "or with --register-image; see rigs/markers/example.toml")
@@ -90,6 +92,10 @@ def _calibrate(args) -> int:
     name = args.name or Path(args.out).stem
     res = calibrate(detections, args.model, board=spec, name=name, working_distance_m=args.working_distance,
                     skipped=skipped, cross_validate=not args.no_cross_validation, outlier_sigma=args.outlier_sigma)
+    if res.undetermined and not args.force:
+        from capture.solve import CalibrationError
+        raise CalibrationError(f"{res.undetermined}. No camera file written; pass --force to write {args.out} "
+                               "anyway (its [quality] keeps the intervals)")
     cam = res.camera
     if args.extrinsics_from:
         cam = _with_pose_from(cam, args.extrinsics_from)

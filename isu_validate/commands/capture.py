@@ -4,6 +4,8 @@
     isu-validate capture shoot --source SPEC --frames N --out DIR [--exposure-us U --iso I | --auto-exposure]
     isu-validate capture shoot --source SPEC --pair PAIRS/<sample>   (frames into real/, with the alignment aid)
     isu-validate capture align --source SPEC --pair PAIRS/<sample>   (live: the aid only, nothing stored)
+    isu-validate capture import PHOTOS... --out DIR | --pair PAIRS/<sample> [--exposure-us U[,U...]] [--iso I]
+                                 (phone or DSLR photos: sidecars from their EXIF, pixels unchanged)
 """
 from __future__ import annotations
 
@@ -37,6 +39,23 @@ def register(sub) -> None:
     ap.add_argument("--pair", required=True, help="PAIRS/<sample>")
     ap.add_argument("--frames", type=int, default=0, help="stop after N frames (default: until Ctrl-C)")
     ap.set_defaults(func=run_align)
+    ip = csub.add_parser("import", help="photos from any camera (JPEG, PNG, TIFF) as frames with sidecars from EXIF")
+    ip.add_argument("photos", nargs="+", help="photos or folders of photos")
+    ip.add_argument("--out", help="folder: one subfolder per burst (set_01, ...: a bracket stays together), each "
+                                  "with a nominal camera.toml")
+    ip.add_argument("--pair", help="a sample of a pairs directory (PAIRS/<sample>): the photos become its real/ "
+                                   "frames (frame_NNNN), for `agree`")
+    ip.add_argument("--exposure-us", type=_exposures, metavar="U[,U...]",
+                    help="exposure time in microseconds where EXIF has none: one for all photos or one per photo")
+    ip.add_argument("--iso", type=float, help="ISO where EXIF has none (gain x 100)")
+    mode = ip.add_mutually_exclusive_group()
+    mode.add_argument("--auto-exposure", dest="auto", action="store_const", const=True,
+                      help="the camera chose the exposures (overrides EXIF's exposure mode)")
+    mode.add_argument("--manual", dest="auto", action="store_const", const=False,
+                      help="the exposures were set by hand, e.g. a bracket (overrides EXIF's exposure mode)")
+    ip.add_argument("--burst-gap", type=float, default=60.0, metavar="SECONDS",
+                    help="a longer pause between two photos starts a new folder (default 60)")
+    ip.set_defaults(func=run_import)
     p.set_defaults(func=lambda args: p.print_help() or 2)
 
 
@@ -95,6 +114,48 @@ def run_shoot(args) -> int:
                           "warnings": session.warnings}, indent=2))
     else:
         print(f"wrote {len(session.frames)} frame(s) with sidecars to {session.out}")
+    return 0
+
+
+def _exposures(text: str) -> list[float]:
+    import argparse
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        values = []
+    if not values or min(values) <= 0:
+        raise argparse.ArgumentTypeError(f"expected positive microseconds, e.g. 125000 or 125000,1000000; got {text!r}")
+    return values
+
+
+def run_import(args) -> int:
+    from capture.photo_import import import_photos
+    from isu_validate.errors import InputError
+    if (args.out is None) == (args.pair is None):
+        raise InputError("give --out DIR (a folder of imported frames) or --pair PAIRS/<sample>, one of the two")
+    if args.pair:
+        sample = _pair(args.pair)
+        result = import_photos(args.photos, sample.real_dir, args.exposure_us, args.iso, args.auto,
+                               args.burst_gap, rename="frame_", first_index=sample.next_frame_index())
+    else:
+        from isu_validate.archive.output_dir import claim_output
+        output = claim_output(args.out, "capture import", {}, overwrite=None)
+        output.mark()
+        result = import_photos(args.photos, args.out, args.exposure_us, args.iso, args.auto, args.burst_gap)
+    for folder, frames in result.folders.items():
+        where = result.out / folder
+        sidecars = [json.loads(f.with_suffix(".json").read_text()) for f in frames]
+        times = ", ".join(f"{s['exposure_us'] / 1e6:g}" for s in sidecars)
+        modes = {"auto" if s["auto_exposure"] else "manual" for s in sidecars}
+        print(f"{where}: {len(frames)} frame(s) from {sidecars[0]['device']}, exposure {times} s, ISO "
+              f"{', '.join(sorted({f'{s['iso']:g}' for s in sidecars}))}, {'/'.join(sorted(modes))}"
+              + (f"; nominal camera file {result.cameras[folder]}" if folder in result.cameras else ""))
+    for note in result.notes:
+        print(f"note: {note}", file=sys.stderr)
+    if not args.pair:
+        first = next(iter(result.folders))
+        print(f"next: isu-validate exposure fit {result.out / first} --camera {result.cameras[first]} "
+              f"--out camera-fitted.toml", file=sys.stderr)
     return 0
 
 

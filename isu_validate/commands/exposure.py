@@ -19,6 +19,10 @@ from pathlib import Path
 
 from . import add_overwrite_option
 
+CHART_BOX_HELP = ("where the chart is in the real frame when no detector finds it: X,Y,W,H in pixels around "
+                  "its 24 patches (dark skin at the top left), or X1,Y1,...,X4,Y4: the corners of the patch "
+                  "area from dark skin clockwise (bluish green, black, white)")
+
 EPILOG = """a camera file with an imaging model develops every render through it:
   isu-validate render scene.json --camera CAM2.toml --out sim.png
   isu-validate run --camera CAM2.toml --out runs/cam2
@@ -59,6 +63,7 @@ def register(sub) -> None:
     ch.add_argument("--pitch", type=float, default=None, help="patch centre distance in metres (default 0.0445)")
     ch.add_argument("--preset", default="standard")
     ch.add_argument("--detector", default="auto", choices=["auto", "mcc", "ccd"])
+    ch.add_argument("--chart-box", metavar="BOX", help=CHART_BOX_HELP)
     ch.set_defaults(func=_chart)
 
     col = s.add_parser("colour", help="fit the colour correction on a ColorChecker in a real frame and a render")
@@ -68,6 +73,7 @@ def register(sub) -> None:
     col.add_argument("--camera", help="camera file whose [response] linearises the real frame (default sRGB)")
     col.add_argument("--camera-out", help="write the camera file with the fitted [colour] and white balance here")
     col.add_argument("--detector", default="auto", choices=["auto", "mcc", "ccd"])
+    col.add_argument("--chart-box", metavar="BOX", help=CHART_BOX_HELP)
     col.add_argument("--json", action="store_true")
     col.set_defaults(func=_colour)
 
@@ -187,10 +193,16 @@ def _chart(args) -> int:
     from capture.camera_model.virtual_chart import DEFAULT_PITCH_M
     from isu_validate.render.virtual_chart import render_virtual_chart
     info = render_virtual_chart(args.real, args.camera, args.out, args.preset, args.pitch or DEFAULT_PITCH_M,
-                                args.detector)
-    print(f"virtual chart rendered to {args.out} (chart found by {info['detector']}, board at "
+                                args.detector, _box(args.chart_box))
+    print(f"virtual chart rendered to {args.out} (chart {'pointed at' if info['detector'] == 'box' else 'found'} by "
+          f"{info['detector']}, board at "
           f"{[round(v, 3) for v in info['board_position']]} m in the cabin)")
     return 0
+
+
+def _box(text: str | None):
+    from capture.camera_model.chart import parse_box
+    return parse_box(text) if text else None
 
 
 def _colour(args) -> int:
@@ -201,7 +213,8 @@ def _colour(args) -> int:
     if args.camera_out and not args.camera:
         raise InputError("--camera-out needs --camera (the camera file to extend)")
     response = model.response if model is not None else None
-    fit, report = align(read_real(args.real, response, args.detector), read_sim(args.sim, args.detector), response)
+    fit, report = align(read_real(args.real, response, args.detector, _box(args.chart_box)),
+                        read_sim(args.sim, args.detector), response)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(report, indent=1))
     if args.camera_out:

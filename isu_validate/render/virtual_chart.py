@@ -20,13 +20,14 @@ from . import render_board
 
 
 def render_virtual_chart(real_path: str | Path, camera: str | Path, out: str | Path, preset: str = "standard",
-                         pitch_m: float = virtual_chart.DEFAULT_PITCH_M, detector: str = "auto") -> dict:
+                         pitch_m: float = virtual_chart.DEFAULT_PITCH_M, detector: str = "auto",
+                         box=None) -> dict:
     rig = load_camera(camera)
     image = read_rgb8(real_path)
     if image.shape[1] != rig.width or image.shape[0] != rig.height:
         raise InputError(f"{real_path} is {image.shape[1]}x{image.shape[0]} but the camera file {camera} is "
                          f"{rig.width}x{rig.height}; use the camera file of the camera that took the frame")
-    R, t, found_by = virtual_chart.locate(image, rig, pitch_m, detector, str(real_path))
+    R, t, found_by = virtual_chart.locate(image, rig, pitch_m, detector, str(real_path), box)
     _, size = virtual_chart.board_layout(pitch_m)
     with tempfile.TemporaryDirectory(prefix="isu-chart-") as tmp:
         texture = Path(tmp) / "colorchecker.png"
