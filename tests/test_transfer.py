@@ -242,3 +242,41 @@ def test_bench_transfer_recipes_parse_and_a_model_recipe_runs(class_set, tmp_pat
     assert "shipped: model" in table and "real set" in table and "own held-out renders" in table
     row = json.loads((out / "bench.json").read_text())[0]
     assert row["scores"]["set"]["phone_position"]["n"] == 6 and row["scores"]["renders"]["phone_position"] == 1.0
+
+
+# ---- clusters: frames of one driver are near-twins
+
+def test_group_bootstrap_is_wider_than_the_photo_bootstrap_when_groups_are_alike():
+    answers = []
+    for g in range(8):   # each driver all right or all wrong, 20 frames each
+        right = g % 2 == 0
+        answers += [Answer(t, t if right else ("NO" if t == "YES" else "YES"), group=f"p{g}")
+                    for t in ["YES", "NO"] * 10]
+    photo = score([Answer(a.truth, a.said) for a in answers], ("YES", "NO"))
+    grouped = score(answers, ("YES", "NO"))
+    assert grouped["bootstrap_unit"] == "group" and photo["bootstrap_unit"] == "photo"
+    width = lambda s: s["balanced_accuracy_ci95"][1] - s["balanced_accuracy_ci95"][0]  # noqa: E731
+    assert width(grouped) > 2 * width(photo)
+    one = score([Answer("YES", "YES", group="p0"), Answer("NO", "NO", group="p0")], ("YES", "NO"))
+    assert one["balanced_accuracy_ci95"] is None        # one cluster: no interval
+
+
+def test_groups_file_is_read_by_path_or_name_and_must_cover_every_photo(class_set, tmp_path):
+    from isu_validate.realphotos.groups import read_groups
+    from isu_validate.transfer import TransferSettings
+    from isu_validate.transfer.measure import read_real_sets
+    csv_file = tmp_path / "subjects.csv"
+    csv_file.write_text("image,subject\nc0/img0.jpg,p1\nimg2.jpg,p2\nc0/img4.jpg,p1\n")
+    assert read_groups(csv_file)["img0.jpg"] == "p1"
+    settings = TransferSettings((str(class_set / "set"),), (str(class_set / "map.toml"),),
+                                groups={"set": str(csv_file)})
+    with pytest.raises(InputError, match="names no group for 3 of its labelled photos"):
+        read_real_sets(settings, SPACE)
+    csv_file.write_text("image,driver\n" + "".join(f"img{i}.jpg,p{i % 3}\n" for i in range(6)))
+    items = read_real_sets(settings, SPACE)[0].items
+    assert sorted(i.group for i in items) == ["p0", "p0", "p1", "p1", "p2", "p2"]
+    with pytest.raises(InputError, match="--groups names other, which is no real set"):
+        read_real_sets(TransferSettings(settings.real, settings.labels, groups={"other": str(csv_file)}), SPACE)
+    (tmp_path / "bad.csv").write_text("file,who\nx,y\n")
+    with pytest.raises(InputError, match="needs an image column"):
+        read_groups(tmp_path / "bad.csv")

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import InputError
-from ..transfer.arguments import add_real_set_arguments
+from ..transfer.arguments import add_real_set_arguments, parse_groups
 
 TRAIN_KEYS = {"camera": str, "cabin": str, "space": str, "preset": str, "n": int, "held_out": int, "seed": int}
 
@@ -134,7 +134,7 @@ def _measure(args, recipe: Recipe, model: Path, renders: Path | None, out: Path)
     space = json.loads((model / "heads.json").read_text()).get("space", args.space)   # the space it was trained in
     settings = TransferSettings(tuple(args.real), tuple(args.labels), "reference", {"model_dir": str(model)},
                                 space, str(renders) if renders else None, args.layout, args.skip_conflicts,
-                                args.limit, seed=args.seed, device=args.device)
+                                parse_groups(args.groups), args.limit, seed=args.seed, device=args.device)
     print(f"bench transfer: measuring recipe {recipe.name}", file=sys.stderr)
     return measure_transfer(settings, out)
 

@@ -21,7 +21,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from ..transfer.arguments import add_real_set_arguments
+from ..transfer.arguments import add_real_set_arguments, parse_groups
 from . import add_overwrite_option
 
 
@@ -58,7 +58,8 @@ def run(args) -> int:
         options["model_dir"] = str(args.model)
     settings = TransferSettings(tuple(args.real), tuple(args.labels), args.sut, options, args.space,
                                 str(args.renders) if args.renders else None, args.layout, args.skip_conflicts,
-                                args.limit, args.repeats, args.prompt_style, args.seed, args.device, args.sut_timeout)
+                                parse_groups(args.groups), args.limit, args.repeats, args.prompt_style, args.seed,
+                                args.device, args.sut_timeout)
     args.interrupted = (f"interrupted; the replies so far are cached in {args.out / 'cache' / 'sut'}: run the same "
                         "command again to continue")
     summary = measure_transfer(settings, args.out, overwrite=args.overwrite)

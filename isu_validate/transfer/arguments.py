@@ -15,7 +15,23 @@ def add_real_set_arguments(p) -> None:
                    help="the sets' layout (default: told from the files)")
     p.add_argument("--skip-conflicts", action="store_true",
                    help="leave a photo out of a feature its labels answer two ways (counted), instead of stopping")
+    p.add_argument("--groups", action="append", default=[], metavar="SET=CSV",
+                   help="which photos of SET (its folder name) belong together (a CSV of image and group: driver, "
+                        "clip): intervals then resample whole groups (repeatable)")
     p.add_argument("--limit", type=int, help="ask about the first N labelled photos of each set only")
     p.add_argument("--space", default="isu-paper", help="scene space whose questions are asked (default isu-paper)")
     p.add_argument("--seed", type=int, default=0, help="seed of the bootstrap and of KID's subsets (default 0)")
     add_device_argument(p)
+
+
+def parse_groups(pairs: list[str]) -> dict[str, str]:
+    """``--groups SET=CSV`` options as {set: csv}."""
+    from ..errors import InputError
+
+    out = {}
+    for pair in pairs:
+        name, sep, path = pair.partition("=")
+        if not sep or not name or not path:
+            raise InputError(f"--groups {pair!r} must read SET=CSV (SET: a real set's folder name)")
+        out[name] = path
+    return out

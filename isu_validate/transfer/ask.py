@@ -17,6 +17,7 @@ class Item:
     name: str                 # unique within its set (the path under the set's root)
     image: Path
     truth: dict[str, str]     # feature -> true answer
+    group: str | None = None  # its cluster (driver, clip) where the set says
 
 
 def ask_all(sut, space: SceneSpace, items: list[Item], features: list[str], label: str, prompt: str | None = None,
@@ -30,7 +31,8 @@ def ask_all(sut, space: SceneSpace, items: list[Item], features: list[str], labe
         response = query_guarded(sut, questions_request(space, questions, item.image, prompt, style))
         said = response.answers or {}
         probabilities = (response.extra.get("meta") or {}).get("probabilities") or {}
-        records.append({"name": item.name, "image": str(item.image), "truth": {q.key: q.truth for q in questions},
+        records.append({"name": item.name, "image": str(item.image), "group": item.group,
+                        "truth": {q.key: q.truth for q in questions},
                         "said": {q.key: said.get(q.key) for q in questions},
                         "p": {q.key: probabilities[q.key] for q in questions if q.key in probabilities},
                         "error": response.error, "problems": list(response.problems),

@@ -17,6 +17,7 @@ from ..archive.output_dir import claim_output
 from ..atomic import write_json, write_text
 from ..errors import InputError
 from ..realphotos import LabelledSet, label_photos, load_label_map, read_photo_set
+from ..realphotos.groups import group_of, read_groups
 from ..space import SceneSpace, load_space
 from .ask import Item, ask_all
 from ..sut.version import sut_version
@@ -38,6 +39,7 @@ class TransferSettings:
     renders: str | None = None                # a dataset (scored and KID) or a folder of renders (KID only)
     layout: str | None = None                 # of every real set; None: told from the files
     skip_conflicts: bool = False
+    groups: dict = field(default_factory=dict)   # set (its folder name or path as given) -> groups CSV
     limit: int | None = None                  # the first N labelled photos of each set
     repeats: int = 1
     prompt_style: str | None = None
@@ -49,6 +51,7 @@ class TransferSettings:
         out = {k: v for k, v in asdict(self).items() if k not in ("device", "sut_timeout_s", "labels")}
         out["real"] = [str(Path(r).resolve()) for r in self.real]
         out["renders"] = str(Path(self.renders).resolve()) if self.renders else None
+        out["groups"] = {k: str(Path(v).resolve()) for k, v in self.groups.items()}
         out["label_maps"] = label_digests
         out["sut_fingerprint"] = sut_fingerprint
         return out
@@ -109,9 +112,24 @@ def read_real_sets(settings: TransferSettings, space: SceneSpace) -> list[RealSe
         photos = labelled.photos[: settings.limit] if settings.limit else labelled.photos
         name = _unique(Path(root).name or f"set{i}", names)
         base = photo_set.root
-        sets.append(RealSet(name, labelled, [Item(str(p.path.relative_to(base)) if p.path.is_relative_to(base)
-                                                  else str(p.path), p.path, p.answers) for p in photos]))
+        groups = _groups_of(settings, root)
+        items = [Item(str(p.path.relative_to(base)) if p.path.is_relative_to(base) else str(p.path), p.path,
+                      p.answers, group_of(groups, p.path, base) if groups else None) for p in photos]
+        missing = sum(item.group is None for item in items) if groups else 0
+        if missing:
+            raise InputError(f"the groups file of {root} names no group for {missing} of its labelled photos "
+                             f"(e.g. {next(i.name for i in items if i.group is None)}): list every photo")
+        sets.append(RealSet(name, labelled, items))
+    unknown = set(settings.groups) - {Path(r).name for r in settings.real} - set(settings.real)
+    if unknown:
+        raise InputError(f"--groups names {', '.join(sorted(unknown))}, which is no real set given "
+                         f"({', '.join(Path(r).name for r in settings.real)})")
     return sets
+
+
+def _groups_of(settings: TransferSettings, root: str) -> dict[str, str]:
+    path = settings.groups.get(root) or settings.groups.get(Path(root).name)
+    return read_groups(path) if path else {}
 
 
 def _unique(name: str, taken: set) -> str:
@@ -150,7 +168,7 @@ def _scores(records: list[dict], space: SceneSpace, features: list[str], seed: i
         options = space.features[feature].options
         positive = positive_class(options)
         answers = [Answer(r["truth"][feature], r["said"].get(feature),
-                          (r["p"].get(feature) or {}).get(positive) if r.get("p") else None)
+                          (r["p"].get(feature) or {}).get(positive) if r.get("p") else None, r.get("group"))
                    for r in records if feature in r["truth"]]
         if answers:
             out[feature] = score(answers, options, seed)

@@ -23,6 +23,7 @@ class Answer:
     truth: str
     said: str | None                 # None: unanswered
     p_positive: float | None = None  # the SUT's probability of the positive class, when it gives one
+    group: str | None = None         # the photo's cluster (its driver, its video clip): the bootstrap's unit
 
 
 def positive_class(options: tuple[str, ...] | list[str]) -> str:
@@ -51,7 +52,8 @@ def score(answers: list[Answer], options: tuple[str, ...] | list[str], seed: int
     out.update(accuracy=hits / len(answered), accuracy_ci95=wilson(hits, len(answered)),
                recall={c: _recall(truth, said, c) for c in classes},
                balanced_accuracy=balanced_accuracy(truth, said),
-               balanced_accuracy_ci95=_bootstrap_ba(truth, said, seed),
+               balanced_accuracy_ci95=_bootstrap_ba(truth, said, seed, _groups(answered)),
+               bootstrap_unit="group" if _groups(answered) is not None else "photo",
                confusion={"labels": labels,
                           "rows": {c: [int(((truth == c) & (said == s)).sum()) for s in labels] for c in classes}},
                auc=_auc(answered, positive_class(options)),
@@ -77,14 +79,36 @@ def _recall(truth: np.ndarray, said: np.ndarray, c: str) -> dict:
     return {"rate": hits / int(mask.sum()), "n": int(mask.sum()), "ci95": wilson(hits, int(mask.sum()))}
 
 
-def _bootstrap_ba(truth: np.ndarray, said: np.ndarray, seed: int) -> list[float] | None:
-    """95% percentile interval, resampling within each true class (the class shares stay fixed)."""
-    groups = [np.flatnonzero(truth == c) for c in np.unique(truth)]
-    if any(len(g) < 2 for g in groups):
-        return None
+def _groups(answered: list[Answer]) -> np.ndarray | None:
+    groups = [a.group for a in answered]
+    return None if any(g is None for g in groups) else np.array(groups)
+
+
+def _bootstrap_ba(truth: np.ndarray, said: np.ndarray, seed: int, groups: np.ndarray | None = None):
+    """95% percentile interval. Photos independent: resampled within each true class (the class shares stay
+    fixed). Photos in clusters (frames of one driver's video are near-twins): whole clusters resampled, a
+    replicate missing a class left out; without 2 clusters and 2 photos per class, no interval."""
     rng = np.random.default_rng(seed)
     correct = truth == said
-    values = np.mean([correct[rng.choice(g, size=(BOOTSTRAP, len(g)))].mean(axis=1) for g in groups], axis=0)
+    classes = np.unique(truth)
+    if groups is not None:
+        names, index = np.unique(groups, return_inverse=True)
+        members = [np.flatnonzero(index == g) for g in range(len(names))]
+        if len(names) < 2:
+            return None
+        values = []
+        for pick in rng.integers(len(names), size=(BOOTSTRAP, len(names))):
+            rows = np.concatenate([members[g] for g in pick])
+            if len(np.unique(truth[rows])) == len(classes):
+                values.append(np.mean([correct[rows][truth[rows] == c].mean() for c in classes]))
+        values = np.array(values)
+    else:
+        by_class = [np.flatnonzero(truth == c) for c in classes]
+        if any(len(g) < 2 for g in by_class):
+            return None
+        values = np.mean([correct[rng.choice(g, size=(BOOTSTRAP, len(g)))].mean(axis=1) for g in by_class], axis=0)
+    if len(values) < BOOTSTRAP // 2:
+        return None
     return [float(np.percentile(values, 2.5)), float(np.percentile(values, 97.5))]
 
 
