@@ -85,7 +85,8 @@ def test_coco_and_csv_layouts(tmp_path):
     assert coco.layout == "coco" and coco.photos[0].boxes[0].xyxy == (10, 20, 40, 60)
     _save(tmp_path / "csv" / "c6" / "y.jpg", _photos()[2])
     (tmp_path / "csv" / "list.csv").write_text("subject,classname,img\np1,c6,y.jpg\np1,c6,gone.jpg\n")
-    listed = read_photo_set(tmp_path / "csv")
+    assert read_photo_set(tmp_path / "csv").layout == "classes"      # class folders first; the CSV beside them
+    listed = read_photo_set(tmp_path / "csv", "csv")
     assert listed.layout == "csv" and listed.photos[0].classes == ("c6",) and "not found" in listed.notes[0]
 
 

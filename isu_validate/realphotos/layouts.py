@@ -84,10 +84,10 @@ def detect_layout(root: Path) -> str:
         return "yolo"
     if _coco_files(root):
         return "coco"
+    if _class_dirs(root):   # class folders first: a CSV beside them is usually metadata (drivers, splits)
+        return "classes"
     if sorted(root.glob("*.csv")):
         return "csv"
-    if _class_dirs(root):
-        return "classes"
     raise InputError(f"cannot tell the layout of {root}: it has no data.yaml (YOLO), no COCO .json, no .csv and no "
                      "class folders of images; point at the folder that holds them or pass --layout")
 
