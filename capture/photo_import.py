@@ -22,7 +22,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from isu_validate.atomic import write_text
-from isu_validate.errors import InputError, InputNotFound
+from isu_validate.errors import InputError
+from isu_validate.image_files import expand_images
 
 RAW_SUFFIXES = (".dng", ".cr2", ".cr3", ".nef", ".arw", ".orf", ".rw2", ".raf", ".pef", ".srw")
 PHOTO_SUFFIXES = (".jpg", ".jpeg", ".png", ".tif", ".tiff", ".webp")
@@ -137,18 +138,7 @@ def _time(value, subsec) -> str | None:
 
 def expand_photos(items) -> list[Path]:
     """Photos named or found in the folders named (sorted); RAW files and missing paths are refused."""
-    paths = []
-    for item in map(Path, items):
-        if item.is_dir():
-            found = sorted(p for p in item.iterdir() if p.is_file() and not p.name.startswith(".")
-                           and p.suffix.lower() in PHOTO_SUFFIXES + RAW_SUFFIXES)
-            if not found:
-                raise InputError(f"folder {item} holds no photos ({', '.join(PHOTO_SUFFIXES)})")
-            paths += found
-        elif item.is_file():
-            paths.append(item)
-        else:
-            raise InputNotFound(f"photo {item} does not exist")
+    paths = expand_images(items, "photo ", PHOTO_SUFFIXES + RAW_SUFFIXES)
     for p in paths:
         if p.suffix.lower() in RAW_SUFFIXES:
             raise ImportFailed(f"{p} is a RAW file: import takes the camera's JPEG, PNG or TIFF (8-bit). Shoot "

@@ -13,15 +13,16 @@ from .errors import InputError, InputNotFound
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp")
 
 
-def expand_images(items, kind: str = "") -> list[Path]:
+def expand_images(items, kind: str = "", suffixes: tuple[str, ...] = IMAGE_SUFFIXES) -> list[Path]:
     """Files and folders to image files: a folder gives its images (sorted, hidden files left out), a
     file itself. One-line errors name a folder without images or a path that does not exist; ``kind``
-    prefixes what they call it ("style " -> "style folder ...", "style image ...")."""
+    prefixes what they call it ("style " -> "style folder ...", "style image ..."); ``suffixes`` are the
+    files a folder gives (a command that refuses some of them with its own words can take those too)."""
     paths: list[Path] = []
     for item in map(Path, items):
         if item.is_dir():
-            found = sorted(p for p in item.iterdir()
-                           if p.suffix.lower() in IMAGE_SUFFIXES and not p.name.startswith("."))
+            found = sorted(p for p in item.iterdir() if p.is_file()
+                           and p.suffix.lower() in suffixes and not p.name.startswith("."))
             if not found:
                 raise InputError(f"{kind}folder {item} holds no images ({', '.join(IMAGE_SUFFIXES)})")
             paths += found

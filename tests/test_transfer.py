@@ -279,5 +279,5 @@ def test_groups_file_is_read_by_path_or_name_and_must_cover_every_photo(class_se
     with pytest.raises(InputError, match="--groups names other, which is no real set"):
         read_real_sets(TransferSettings(settings.real, settings.labels, groups={"other": str(csv_file)}), SPACE)
     (tmp_path / "bad.csv").write_text("file,who\nx,y\n")
-    with pytest.raises(InputError, match="needs an image column"):
+    with pytest.raises(InputError, match="needs an image column .image, img.* and a group column"):
         read_groups(tmp_path / "bad.csv")

@@ -8,11 +8,10 @@ file name alone.
 """
 from __future__ import annotations
 
-import csv
 from pathlib import Path
 
-from ..errors import InputError, InputNotFound
-from .layouts import IMAGE_COLUMNS
+from ..errors import InputNotFound
+from .layouts import IMAGE_COLUMNS, read_csv
 
 GROUP_COLUMNS = ("group", "subject", "driver", "clip", "video", "session")
 
@@ -22,14 +21,7 @@ def read_groups(path: str | Path) -> dict[str, str]:
     path = Path(path)
     if not path.is_file():
         raise InputNotFound(f"groups file {path} does not exist")
-    with path.open(newline="") as f:
-        rows = list(csv.DictReader(f))
-    columns = {c.lower().strip(): c for c in (rows[0].keys() if rows else ())}
-    image = next((columns[c] for c in IMAGE_COLUMNS if c in columns), None)
-    group = next((columns[c] for c in GROUP_COLUMNS if c in columns), None)
-    if image is None or group is None:
-        raise InputError(f"{path}: a groups CSV needs an image column ({', '.join(IMAGE_COLUMNS)}) and a group "
-                         f"column ({', '.join(GROUP_COLUMNS)}); it has {', '.join(columns) or 'none'}")
+    rows, (image, group) = read_csv(path, "a groups CSV", image=IMAGE_COLUMNS, group=GROUP_COLUMNS)
     out: dict[str, str] = {}
     names: dict[str, set] = {}
     for row in rows:

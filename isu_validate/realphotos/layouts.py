@@ -250,14 +250,7 @@ def _csv(root: Path) -> PhotoSet:
     base = root.parent if root.is_file() else root
     photos, notes = [], []
     for path in files:
-        with path.open(newline="") as f:
-            rows = list(csv.DictReader(f))
-        columns = {c.lower().strip(): c for c in (rows[0].keys() if rows else ())}
-        image_col = next((columns[c] for c in IMAGE_COLUMNS if c in columns), None)
-        label_col = next((columns[c] for c in LABEL_COLUMNS if c in columns), None)
-        if image_col is None or label_col is None:
-            raise InputError(f"{path}: a real-photo CSV needs an image column ({', '.join(IMAGE_COLUMNS)}) and a "
-                             f"label column ({', '.join(LABEL_COLUMNS)}); it has {', '.join(columns) or 'none'}")
+        rows, (image_col, label_col) = read_csv(path, "a real-photo CSV", image=IMAGE_COLUMNS, label=LABEL_COLUMNS)
         missing = 0
         for row in rows:
             label = str(row[label_col]).strip()
@@ -269,3 +262,16 @@ def _csv(root: Path) -> PhotoSet:
         if missing:
             notes.append(f"{path.name}: {missing} image(s) listed but not found: left out")
     return PhotoSet(base, "csv", photos, notes)
+
+
+def read_csv(path: Path, what: str, **wanted: tuple[str, ...]) -> tuple[list[dict], list[str]]:
+    """(rows, the column chosen for each ``wanted`` role: the first of its names the CSV has, any case)."""
+    with path.open(newline="") as f:
+        rows = list(csv.DictReader(f))
+    columns = {c.lower().strip(): c for c in (rows[0].keys() if rows else ())}
+    chosen = [next((columns[c] for c in names if c in columns), None) for names in wanted.values()]
+    if None in chosen:
+        needs = " and ".join(f"an {role} column ({', '.join(names)})" if role[0] in "aeiou" else
+                             f"a {role} column ({', '.join(names)})" for role, names in wanted.items())
+        raise InputError(f"{path}: {what} needs {needs}; it has {', '.join(columns) or 'none'}")
+    return rows, chosen
