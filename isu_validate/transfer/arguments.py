@@ -18,7 +18,8 @@ def add_real_set_arguments(p) -> None:
     p.add_argument("--groups", action="append", default=[], metavar="SET=CSV",
                    help="which photos of SET (its folder name) belong together (a CSV of image and group: driver, "
                         "clip): intervals then resample whole groups (repeatable)")
-    p.add_argument("--limit", type=int, help="ask about the first N labelled photos of each set only")
+    p.add_argument("--limit", type=int,
+                   help="ask about N labelled photos of each set only, spread evenly through it (a quick look)")
     p.add_argument("--space", default="isu-paper", help="scene space whose questions are asked (default isu-paper)")
     p.add_argument("--seed", type=int, default=0, help="seed of the bootstrap and of KID's subsets (default 0)")
     add_device_argument(p)

@@ -40,7 +40,7 @@ class TransferSettings:
     layout: str | None = None                 # of every real set; None: told from the files
     skip_conflicts: bool = False
     groups: dict = field(default_factory=dict)   # set (its folder name or path as given) -> groups CSV
-    limit: int | None = None                  # the first N labelled photos of each set
+    limit: int | None = None                  # N labelled photos of each set, spread evenly through it
     repeats: int = 1
     prompt_style: str | None = None
     seed: int = 0                             # the bootstrap's and KID's subsets
@@ -109,7 +109,7 @@ def read_real_sets(settings: TransferSettings, space: SceneSpace) -> list[RealSe
         photo_set = read_photo_set(root, settings.layout)
         labelled = label_photos(photo_set, label_map, settings.skip_conflicts)
         labelled.source.update(label_map=str(label_map.path.resolve()), label_map_digest=label_map.digest)
-        photos = labelled.photos[: settings.limit] if settings.limit else labelled.photos
+        photos = _spread(labelled.photos, settings.limit)
         name = _unique(Path(root).name or f"set{i}", names)
         base = photo_set.root
         groups = _groups_of(settings, root)
@@ -125,6 +125,13 @@ def read_real_sets(settings: TransferSettings, space: SceneSpace) -> list[RealSe
         raise InputError(f"--groups names {', '.join(sorted(unknown))}, which is no real set given "
                          f"({', '.join(Path(r).name for r in settings.real)})")
     return sets
+
+
+def _spread(photos: list, limit: int | None) -> list:
+    """``limit`` photos spread evenly through the set (every k-th: all its class folders, not the first)."""
+    if not limit or limit >= len(photos):
+        return photos
+    return [photos[i * len(photos) // limit] for i in range(limit)]
 
 
 def _groups_of(settings: TransferSettings, root: str) -> dict[str, str]:
