@@ -273,3 +273,38 @@ def test_creases_mark_skin_an_expression_gathers_and_nothing_else():
     rest_dup = rest.copy()
     rest_dup[1] = rest_dup[0]                                     # two vertices on one point at rest
     assert np.isfinite(crease_field(faces, rest_dup, squeezed, everywhere)).all()
+
+
+def test_the_bob_has_its_locks_behind_the_forehead_and_short_hair_stays_the_shell(people, model):
+    """87 tapered cards over the bob, rooted on its shell and lying along it (within 1.5 cm), none over the
+    forehead (no fringe: the planners' decision on issue 32); short hair and the buzz cut have none."""
+    from isu_validate.render.people import hair
+
+    for style in ("short", "buzz"):
+        topology = _load(people.topology("male", style))
+        assert len(topology["lock_face"]) == 0 and len(topology["lock_faces"]) == 0, style
+    topology = _load(people.topology("female"))
+    state = _load(people.driver_state("FEMALE", "H3", "W2", "HAPPY", "NONE"))
+    n = len(topology["lock_face"])
+    assert n == hair.LOCKS["bob"] == 87 and state["locks"].shape == (n * 2 * hair.LOCK_POINTS, 3)
+    assert topology["lock_faces"].max() == len(state["locks"]) - 1 and np.isfinite(state["locks"]).all()
+    rest = people_module.Body(model, people_module.driver_phenotype("FEMALE", "H3", "W2")).evaluate({})
+    style = hair.HairStyle("bob", topology["hair_i"], topology["hair_j"], topology["hair_t"], topology["hair_faces"],
+                           topology["hair_thickness"], topology["field_scalp"])
+    v = rest.vertices.astype(np.float64)
+    shell = hair.hair_vertices(style, v, hair.vertex_normals(v, topology["faces"])).astype(np.float64)
+    locks = hair.Locks(topology["lock_face"], topology["lock_bary"], topology["lock_length"], topology["lock_width"],
+                       topology["lock_lift"], int(topology["lock_crown"]))
+    cards = hair.lock_vertices(locks, topology["hair_faces"], shell).astype(np.float64)
+    nearest = np.min(np.linalg.norm(cards[:, None] - shell[None], axis=2), axis=1)
+    assert nearest.max() < 0.015                                         # they lie on the bob, not off it
+    across = np.linalg.norm(cards[0::2] - cards[1::2], axis=1).reshape(n, hair.LOCK_POINTS)
+    assert np.allclose(across[:, -1] / across[:, 0], hair.TIP_SHARE, atol=0.01)   # tapered to the tip
+    head = hair.head_frame(rest)
+    bearing = head.bearing(cards)
+    knots = np.array(hair._HAIRLINES["bob"])
+    hairline = head.eyes[2] + head.size * np.interp(bearing, knots[:, 0], knots[:, 1])
+    forehead = (bearing > 0.45) & (cards[:, 2] < hairline)
+    assert not forehead.any(), f"{forehead.sum()} lock vertices over the forehead"
+    roots = cards.reshape(n, hair.LOCK_POINTS, 2, 3)[:, 0].mean(axis=1)
+    assert (head.bearing(roots) <= hair.FACE_SIDE + 0.05).all()         # rooted behind the face's side

@@ -38,8 +38,8 @@ from .worker import BlenderWorker, WorkerCrashed, WorkerFailed, WorkerTimeout
 # 2: driver_face part, footprints; 3: the phone, can and bottle lie on the co-driver seat; 4: anny people;
 # 5: the camera frames tall drivers' heads, P8 by the door in view, light tree off; 6: people and things
 # that read as real (issues 32, 33); 7: the phone gripped at P1-P10, upright at the ears, portrait when read;
-# 8: short hair fuller on top with sideburns, brows darker than the hair, GREY hair darker
-RENDERER_VERSION = "isu-blender-8"
+# 8: short hair fuller on top with sideburns, brows darker than the hair, GREY hair darker; 9: locks over the bob
+RENDERER_VERSION = "isu-blender-9"
 
 # what the worker shows for a feature the scene space does not have (or that is inactive)
 DEFAULTS = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height": "H2", "driver_weight": "W2",
