@@ -183,9 +183,9 @@ def hair_vertices(style: HairStyle, vertices: np.ndarray, normals: np.ndarray) -
 # The bob carries locks: opaque tapered cards rooted on its shell, lying along the head as they flow from
 # the crown and droop, standing a little off it, so its outline and its highlights break into locks. None
 # grows on the face's side of the head (no fringe over the forehead: the planners' decision on issue 32), and
-# a lock rooted in front of the ears ends above the hairline. Short hair and the buzz cut stay the shell
-# (cards on short hair hardly show at the cabin camera's scale). As Cycles curves (about 25 000 locks) they
-# cost standard's SSIM more than its floor allows; 87 cards cost it 0.0007-0.0018 per bob scene.
+# each ends above the hairline (the bob's lower edge behind the face), so none hangs free of the bob. Short
+# hair and the buzz cut stay the shell (cards on short hair hardly show at the cabin camera's scale). As Cycles
+# curves (about 25 000 locks) they cost standard's SSIM more than its floor allows.
 LOCKS = {"bob": 87}
 LOCK_POINTS = 4               # along a card's middle line; a card is a strip of LOCK_POINTS - 1 quads
 LOCK_LENGTH = (0.030, 0.060)  # m, a 1.75 m adult's
@@ -214,7 +214,8 @@ class Locks:
 
 def lock_roots(style: HairStyle, shell: np.ndarray, rest: Posed, seed: int = LOCK_SEED) -> Locks:
     """The style's locks on its shell ``shell`` (vertices on the rest body): roots spread by area over the
-    shell behind ``FACE_SIDE``; none for a style without locks."""
+    shell behind ``FACE_SIDE``, each no longer than its root's height above the hairline; none for a style
+    without locks."""
     n = LOCKS.get(style.name, 0)
     if not n:
         none = np.zeros(0, np.float32)
@@ -231,14 +232,22 @@ def lock_roots(style: HairStyle, shell: np.ndarray, rest: Posed, seed: int = LOC
     bary = np.column_stack([1.0 - u - v, u, v])
     corners = style.faces[face]
     t = style.t[corners]
+    root = np.einsum("sk,skd->sd", bary, shell[corners])
     above = (bary * ((1 - t) * style.field[style.i[corners]] + t * style.field[style.j[corners]])).sum(axis=1)
-    in_front = head.bearing(np.einsum("sk,skd->sd", bary, shell[corners])) > 0.0
     length = rng.uniform(*LOCK_LENGTH, n) * head.size
-    length = np.where(in_front, np.minimum(length, np.maximum(above, 0.004)), length)   # ends above the hairline
+    # a lock ends above the hairline and above the shell's own lower edge near it (the shell ends where the
+    # head's and neck's skin does, above the nape's hairline): none hangs free of the bob, none falls over the face
+    length = np.minimum(length, np.maximum(np.minimum(above, root[:, 2] - _edge_below(root, shell)), 0.004))
     crown = int(np.argmax(shell[:, 2] + 0.4 * shell[:, 1]))          # top and back of the head (faces -Y)
     return Locks(face.astype(np.int32), bary.astype(np.float32), length.astype(np.float32),
                  (rng.uniform(*LOCK_WIDTH, n) * head.size).astype(np.float32),
                  (rng.uniform(*LOCK_LIFT, n) * head.size).astype(np.float32), crown)
+
+
+def _edge_below(points: np.ndarray, shell: np.ndarray, reach: float = 0.03) -> np.ndarray:
+    """The height of the shell's lowest vertex within ``reach`` (m, across) of each point."""
+    across = np.linalg.norm(points[:, None, :2] - shell[None, :, :2], axis=2)
+    return np.where(across < reach, shell[None, :, 2], np.inf).min(axis=1)
 
 
 def lock_faces(n: int) -> np.ndarray:
