@@ -308,3 +308,4 @@ def test_reference_train_passes_its_variety_to_the_renderer_and_the_card(tmp_pat
     assert main([*args, "--out", str(tmp_path / "bad"), "--camera-jitter", "focal=2"]) == 2
     err = capsys.readouterr().err
     assert "focal must be between 0 and 0.3" in err and len(err.strip().splitlines()) == 1 and len(seen) == 2
+
