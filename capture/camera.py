@@ -172,6 +172,22 @@ class Camera:
         scaled = [self.fx * sx, self.fy * sy, (self.cx + 0.5) * sx - 0.5, (self.cy + 0.5) * sy - 0.5]
         return replace(self, width=w, height=h, intrinsics=np.array(scaled + list(self.distortion)))
 
+    def nudged(self, shift=(0.0, 0.0, 0.0), turn_deg=(0.0, 0.0, 0.0), focal_scale: float = 1.0) -> "Camera":
+        """This camera moved by ``shift`` (cabin frame, metres), turned by ``turn_deg`` about its own x (tilt),
+        y (pan) and z (roll) axes in that order, and with its focal length times ``focal_scale`` (the principal
+        point and the distortion kept): a camera mounted a little differently in the same place."""
+        from scipy.spatial.transform import Rotation
+
+        if focal_scale <= 0:
+            raise ValueError(f"focal_scale must be positive, got {focal_scale}")
+        if not np.any(shift) and not np.any(turn_deg) and focal_scale == 1.0:
+            return self   # bit for bit: a zero nudge must not even flip a zero's sign in the hash
+        turn = Rotation.from_euler("XYZ", turn_deg, degrees=True).as_matrix()   # R_camera_from_nudged
+        intrinsics = np.array(self.intrinsics)
+        intrinsics[:2] *= focal_scale
+        return replace(self, position=tuple(self.t + np.asarray(shift, dtype=float)), rotation=self.R @ turn,
+                       intrinsics=intrinsics)
+
     def with_pose_of(self, other: "Camera") -> "Camera":
         """This camera (lens, image) at the cabin pose of ``other``: ``--extrinsics-from OTHER``."""
         require_registered(other, "the --extrinsics-from rig")

@@ -30,6 +30,7 @@ class RenderResult:
     visibility: dict[str, float] = field(default_factory=dict)  # feature -> visible share (things that exist)
     occluded: list[str] = field(default_factory=list)           # features seen too little to be judged
     up: dict[str, list[float]] = field(default_factory=dict)    # instance -> where its top points (object_axes)
+    variety: dict[str, Any] = field(default_factory=dict)       # the camera jitter and sensor effects drawn (variety)
 
 
 class Renderer(Protocol):

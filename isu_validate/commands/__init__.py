@@ -15,3 +15,16 @@ def add_overwrite_option(parser, what: str) -> None:
     folder holding ``what`` (``archive/output_dir.py`` refuses it otherwise)."""
     parser.add_argument("--overwrite", action="store_true",
                         help=f"write into --out even when it holds {what} (files of the same name are replaced)")
+
+
+def add_variety_arguments(parser) -> None:
+    """``--camera-jitter`` and ``--sensor-effects``: variety per scene for training data (``render/variety.py``);
+    the same two options for ``dataset`` and ``reference train``. Light: the specs are parsed when the command runs."""
+    parser.add_argument("--camera-jitter", metavar="SPEC",
+                        help="move, turn and zoom the camera per scene, seeded by --seed and the scene: "
+                             "pos=METRES,angle=DEGREES,focal=RELATIVE, each the largest either way, drawn uniformly "
+                             "(e.g. pos=0.05,angle=5,focal=0.1); labels follow the camera used (default: none)")
+    parser.add_argument("--sensor-effects", metavar="SPEC",
+                        help="camera effects applied after rendering, strengths seeded per scene: a recipe (mild, "
+                             "strong) and/or maxima exposure=STOPS,white_balance=GAIN,vignette=SHARE,blur=SIGMA_PX,"
+                             "noise=SIGMA_SHARE,jpeg=0..1 (e.g. mild,jpeg=0.6; default: none)")

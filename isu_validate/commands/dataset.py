@@ -8,11 +8,13 @@ from pathlib import Path
 
 from ..dataset.settings import DatasetSettings
 from ..devices import add_device_argument, add_render_device_argument
+from . import add_variety_arguments
 
 _DEFAULTS = DatasetSettings()
 # options that decide the images: left out on --resume, they take the stored value
 _IDENTITY = ("n", "seed", "space", "preset", "camera", "extrinsics_from", "cabin", "prompt_style", "from_runs", "focus",
-             "styles", "style_models", "style_size", "style_steps", "renderer_factory")
+             "styles", "style_models", "style_size", "style_steps", "camera_jitter", "sensor_effects",
+             "renderer_factory")
 
 
 def register(sub) -> None:
@@ -49,6 +51,7 @@ def register(sub) -> None:
     p.add_argument("--style-size", type=int, help=f"Gatys: longer side optimised, px (default {_DEFAULTS.style_size})")
     p.add_argument("--style-steps", type=int,
                    help=f"Gatys: L-BFGS iterations per image (default {_DEFAULTS.style_steps})")
+    add_variety_arguments(p)
     p.add_argument("--resume", action="store_true",
                    help="continue the dataset in --out; options left out keep their stored values, others must match")
     p.add_argument("--workers", type=int, default=1, help="local render processes (default 1)")

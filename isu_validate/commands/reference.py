@@ -7,7 +7,7 @@ from pathlib import Path
 
 from ..devices import add_device_argument, add_render_device_argument
 from ..errors import InputError
-from . import add_overwrite_option
+from . import add_overwrite_option, add_variety_arguments
 
 
 def register(sub) -> None:
@@ -31,6 +31,7 @@ def register(sub) -> None:
     add_render_device_argument(train)
     add_device_argument(train)
     train.add_argument("--cabin", help=f"cabin rig name or .toml path (default {DEFAULTS['cabin']})")
+    add_variety_arguments(train)   # the training, held-out and checked sets alike; the card records them
     train.add_argument("--extra", nargs="+", type=Path, metavar="DATASET",
                        help="retrain on the --base model's own training scenes (its stored features: nothing is "
                             "rendered again) plus these datasets (`isu-validate dataset`); the card compares every "
@@ -51,6 +52,7 @@ def register(sub) -> None:
 
 DEFAULTS = {"n": 600, "held_out": 200, "seed": 0, "preset": "draft", "camera": "default", "cabin": "default"}
 FROM_SCRATCH = ("n", "held_out", "seed", "preset", "check_preset", "camera", "cabin")
+VARIETY = ("camera_jitter", "sensor_effects")   # in the output's identity only when given (older models keep theirs)
 
 
 def cmd_train(args) -> int:
@@ -68,25 +70,28 @@ def cmd_train_new(args) -> int:
     from ..reference.model import default_model_dir
     from ..reference.training import train_reference
     from ..render import RENDERER_VERSION, open_renderer
+    from ..render.variety import Variety, vary
     from ..space import load_space
 
     if args.n < 10 or args.held_out < 1:
         raise InputError("use at least --n 10 training scenes and --held-out 1")
     space = load_space(args.space)
+    variety = Variety.parse(args.camera_jitter, args.sensor_effects, args.seed)
     out = args.out or args.workdir / "model"  # never the shipped model unless asked for by name
     checks = dict(parse_check(spec, args.held_out) for spec in args.check_preset)
-    output = _claim(args, out, {"space": space.hash, **{k: getattr(args, k) for k in FROM_SCRATCH}})
+    output = _claim(args, out, {"space": space.hash, **{k: getattr(args, k) for k in FROM_SCRATCH},
+                                **{k: v for k, v in variety.describe().items() if k in VARIETY}})
 
     def renderer_for(preset: str):
-        return open_renderer(preset=preset, camera=args.camera, cabin=args.cabin, space=space,
-                             cache_dir=args.workdir / "cache", log_dir=args.workdir / "logs",
-                             device=args.render_device)
+        return vary(open_renderer(preset=preset, camera=args.camera, cabin=args.cabin, space=space,
+                                  cache_dir=args.workdir / "cache", log_dir=args.workdir / "logs",
+                                  device=args.render_device), variety)
 
     renderer = renderer_for(args.preset)
     try:
         card = train_reference(space, renderer, out, args.workdir, args.n, args.held_out, args.seed, args.preset,
                                other_presets=checks, renderer_for=renderer_for, renderer_version=RENDERER_VERSION,
-                               device=args.device)
+                               device=args.device, variety=variety.describe())
     finally:
         renderer.close()
     output.mark()   # the model is written last, so a refused or failed training leaves no folder behind
@@ -103,7 +108,7 @@ def cmd_retrain(args) -> int:
     from ..render import RENDERER_VERSION
     from ..space import load_space
 
-    given = [f"--{name.replace('_', '-')}" for name in FROM_SCRATCH
+    given = [f"--{name.replace('_', '-')}" for name in FROM_SCRATCH + VARIETY
              if getattr(args, name) not in (None, [])]
     if given:
         raise InputError(f"--extra keeps the --base model's scenes, seed, preset and held-out set: "

@@ -71,7 +71,7 @@ def build_dataset(settings: DatasetSettings, out: str | Path, resume: bool = Fal
     info["focus"] = _focus_info(settings, plan, runs)
     config = ImageConfig(str(folder.path), settings.space, settings.preset, settings.camera, settings.extrinsics_from,
                          settings.cabin, render_threads(settings.workers), tuple(styles), settings.seed,
-                         settings.renderer_factory, settings.render_device, settings.device)
+                         settings.renderer_factory, settings.render_device, settings.device, settings.variety())
     entries = folder.entries() if resume else {}
     start, made_now = time.monotonic(), 0
     if _usable(entries) < settings.n and len(entries) < plan.limit:   # else: a complete dataset, written again
@@ -118,9 +118,16 @@ def _new_info(folder: DatasetDir, settings: DatasetSettings, space: SceneSpace, 
     return {"format": FORMAT, "complete": False, "space": space.name, "space_hash": space.hash,
             "space_source": space.source, "settings": settings.to_dict(), "identity": settings.identity(),
             "preset": asdict(preset), "versions": versions(bool(styles)),
-            "seeds": {"scenes": settings.seed, "style_noise": settings.seed},
+            "seeds": {"scenes": settings.seed, "style_noise": settings.seed, **_variety_seeds(settings)},
+            "variety": settings.variety().describe() or None,
             "styles": [s.to_dict() for s in styles], "licences": licences(environment, [s.to_dict() for s in styles]),
             "started": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
+
+
+def _variety_seeds(settings: DatasetSettings) -> dict:
+    variety = settings.variety()
+    return {name: settings.seed for name, on in (("camera_jitter", variety.jitter.active),
+                                                  ("sensor_effects", variety.effects.active)) if on}
 
 
 def _resume_info(folder: DatasetDir, settings: DatasetSettings) -> dict:

@@ -119,6 +119,10 @@ def reproduce(settings: DatasetSettings, out: str) -> str:
         parts.append("--from-run " + " ".join(settings.from_runs))
     if settings.focus:
         parts.append(f"--focus '{settings.focus}'" if " " in settings.focus else f"--focus {settings.focus}")
+    if settings.camera_jitter:
+        parts.append(f"--camera-jitter {settings.camera_jitter}")
+    if settings.sensor_effects:
+        parts.append(f"--sensor-effects {settings.sensor_effects}")
     if settings.styles:
         parts.append("--style " + " ".join(settings.styles))
         parts += [f"--style-model {m}" for m in settings.style_models]
@@ -163,6 +167,7 @@ def card_markdown(info: dict) -> str:
               for name, values in c["feature_values"].items()]
     lines += ["", "Occluded (shown too little to be judged; their answer is in `truth` but not judged): "
               + (", ".join(f"{k} {v}" for k, v in c["occluded"].items()) or "none"), ""]
+    lines += _variety(info.get("variety"))
     if info.get("styles"):
         lines += ["## Style copies", ""]
         lines += [f"- style {k}: `{st['image']}`, {st['method']}" +
@@ -178,6 +183,21 @@ def card_markdown(info: dict) -> str:
               "- `truth` in `metadata.jsonl` is what the scene space says; a feature listed in `occluded` may not be "
               "readable in the frame (and is not asked in `vqa.jsonl`).", ""]
     return "\n".join(lines)
+
+
+def _variety(variety: dict | None) -> list[str]:
+    """The camera jitter and sensor effects, with their seed; none: the camera file's frames, untouched."""
+    if not variety:
+        return ["## Camera and sensor", "", "Every render is seen through the camera file's pose and lens as they are "
+                "(no camera jitter, no sensor effects).", ""]
+    return ["## Camera and sensor (variety per scene)", "",
+            f"- camera jitter: `{variety['camera_jitter'] or 'none'}` (uniform per axis: shift in metres along the "
+            "cabin's axes, turn in degrees about the camera's own, focal length relative); the labels (boxes, masks, "
+            "`up`, visibility) are the jittered camera's",
+            f"- sensor effects: `{variety['sensor_effects'] or 'none'}` (each image draws every strength between "
+            "none and its maximum; applied after rendering: exposure, white balance, vignetting, blur, noise, JPEG)",
+            f"- seed {variety['seed']}; per scene: {variety['per_scene']}; what each image drew is its `variety` in "
+            "`metadata.jsonl`", ""]
 
 
 def _cost(costs: dict) -> str:

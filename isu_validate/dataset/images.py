@@ -38,6 +38,7 @@ class ImageConfig:
     renderer_factory: str = ""   # module:function(space) -> renderer; empty: Blender
     render_device: str = "auto"  # Cycles' compute device
     device: str = "auto"         # the style transfer's torch device
+    variety: Any = None          # a render.variety.Variety: per-scene camera jitter and sensor effects
 
 
 @dataclass(frozen=True)
@@ -104,6 +105,7 @@ class ImageMaker:
         return {**entry, "status": "ok", "files": files, "width": int(ids.shape[1]), "height": int(ids.shape[0]),
                 "visibility": dict(result.visibility), "occluded": list(result.occluded),
                 "annotations": instance_annotations(ids), "up": dict(result.up),
+                **({"variety": result.variety} if result.variety else {}),
                 "timings": {"render_s": round(render_s, 4), "style_s": [round(s, 3) for s in style_s],
                             # CPU seconds: Blender's worker, and this process (posing, outputs, masks, styles)
                             "worker_cpu_s": result.timings.get("worker_cpu_s"),
@@ -117,6 +119,19 @@ class ImageMaker:
 
 
 def _renderer(config: ImageConfig, space):
+    from ..render.variety import vary
+
+    renderer = _plain_renderer(config, space)
+    if config.variety is None:
+        return renderer
+    try:
+        return vary(renderer, config.variety)
+    except InputError:
+        renderer.close()
+        raise
+
+
+def _plain_renderer(config: ImageConfig, space):
     if config.renderer_factory:
         module, _, name = config.renderer_factory.partition(":")
         try:

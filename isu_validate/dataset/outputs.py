@@ -16,14 +16,16 @@ from .vqa import vqa_row
 
 def metadata_rows(space: SceneSpace, entry: dict) -> list[dict]:
     """One row per image of a slot: the run label's fields (space, scene_key, scene, truth, visibility,
-    occluded) with the file, its variant and the render it was made from."""
+    occluded) with the file, its variant and the render it was made from (and, in a varied dataset, the camera
+    jitter and sensor effects drawn for it: ``variety``)."""
     scene = entry["scene"]
     label = {"space": space.name, "space_hash": space.hash, "scene_key": space.key(scene), "scene": scene,
              "truth": {q.key: q.truth for q in space.questions(scene)}, "visibility": entry["visibility"],
              "occluded": entry["occluded"]}
     render = entry["files"][0]["file_name"]
     return [{"file_name": f["file_name"], **label, "variant": f["variant"], "source": render,
-             "style": f.get("style"), "slot": entry["slot"], "region": entry["region"]} for f in entry["files"]]
+             "style": f.get("style"), "slot": entry["slot"], "region": entry["region"],
+             **({"variety": entry["variety"]} if entry.get("variety") else {})} for f in entry["files"]]
 
 
 def write_outputs(folder: DatasetDir, space: SceneSpace, entries: list[dict], info: dict, prompt_style: str) -> None:

@@ -153,11 +153,13 @@ def train_reference(space: SceneSpace, renderer, out: Path, workdir: Path, n_tra
                     seed: int, preset: str, backbone: Backbone | None = None,
                     other_presets: Mapping[str, int] | None = None,
                     renderer_for: Callable[[str], object] | None = None, renderer_version: str = "",
-                    device: str = "auto") -> dict:
+                    device: str = "auto", variety: dict | None = None) -> dict:
     """Render, embed, fit and write the heads, the model card and the features of both sets (so that
     ``reference train --extra`` never renders them again). ``other_presets`` maps a preset name to how
     many of the held-out scenes to render at it as well (``renderer_for(name)`` opens a renderer for
-    it, closed here). ``device``: where the backbone runs (``devices.py``), named in the card."""
+    it, closed here). ``device``: where the backbone runs (``devices.py``), named in the card. ``variety``:
+    the camera jitter and sensor effects the renderers apply (``render.variety.Variety.describe()``), recorded
+    in the card and the stored features; {} or None for the camera file's frames."""
     start = time.time()
     train_scenes = balanced_scenes(space, n_train, np.random.default_rng(seed))
     test_scenes = balanced_scenes(space, n_test, np.random.default_rng(seed + 10_000))
@@ -167,13 +169,14 @@ def train_reference(space: SceneSpace, renderer, out: Path, workdir: Path, n_tra
               for name, n in (other_presets or {}).items() if name != preset}
     backbone = backbone or Backbone(device=device)
     made_with = {"space": space.name, "space_hash": space.hash, "renderer": renderer_version, "preset": preset,
-                 "backbone": backbone.name, "input_size": list(backbone.size), "seed": seed}
+                 "backbone": backbone.name, "input_size": list(backbone.size), "seed": seed,
+                 **({"variety": variety} if variety else {})}
     bank = [FeatureSet(embed(backbone, part), [e.scene for e in part], dict(made_with, scenes_seed=scenes_seed))
             for part, scenes_seed in ((train, seed), (test, seed + 10_000))]
     heads, card = fit_and_describe(space, bank[0], bank[1], seed, {
         name: (embed(backbone, examples), [e.scene for e in examples]) for name, examples in others.items()})
     card.update({"render_preset": preset, "renderer": renderer_version, "device": backbone.device.describe(),
-                 "train_seconds": round(time.time() - start, 1)})
+                 "train_seconds": round(time.time() - start, 1), **({"variety": variety} if variety else {})})
     write_model(out, heads, card, bank)
     return card
 
@@ -233,8 +236,10 @@ def model_card_markdown(card: dict) -> str:
              f"- Training set: {card['training_scenes']} rendered scenes, balanced per feature, seed {card['seed']}, "
              f"render preset `{card['render_preset']}`",
              f"- Held-out set: {card['held_out_scenes']} scenes, seed {card['seed'] + 10_000}{also}",
+             *_variety_lines(card.get("variety")),
              f"- Reproduce: `isu-validate reference train --n {card['training_scenes']} "
-             f"--held-out {card['held_out_scenes']} --seed {card['seed']} --preset {card['render_preset']}{reproduce}`",
+             f"--held-out {card['held_out_scenes']} --seed {card['seed']} --preset {card['render_preset']}{reproduce}"
+             + _variety_flags(card.get("variety")) + "`",
              f"- Stored features: `{FILES['train']}` and `{FILES['held_out']}` hold the backbone features (float32), "
              "scenes and renderer version of both sets, so `isu-validate reference train --extra DATASET...` "
              "retrains on them plus the dataset without rendering them again, and compares on the same held-out scenes",
@@ -251,6 +256,21 @@ def model_card_markdown(card: dict) -> str:
     for p, result in presets.items():
         lines += _by_light(result, f"## Held-out accuracy by external light (preset `{p}`)")
     return "\n".join(lines) + "\n"
+
+
+def _variety_lines(variety: dict | None) -> list[str]:
+    if not variety:
+        return []
+    return [f"- Variety (training, held-out and checked sets alike): camera jitter "
+            f"`{variety['camera_jitter'] or 'none'}`, sensor effects `{variety['sensor_effects'] or 'none'}`, seed "
+            f"{variety['seed']}, per scene {variety['per_scene']}"]
+
+
+def _variety_flags(variety: dict | None) -> str:
+    if not variety:
+        return ""
+    return "".join(f" --{name.replace('_', '-')} {variety[name]}" for name in ("camera_jitter", "sensor_effects")
+                   if variety[name])
 
 
 def _by_light(result: dict, heading: str) -> list[str]:

@@ -38,8 +38,8 @@ from .worker import BlenderWorker, WorkerCrashed, WorkerFailed, WorkerTimeout
 # 2: driver_face part, footprints; 3: the phone, can and bottle lie on the co-driver seat; 4: anny people;
 # 5: the camera frames tall drivers' heads, P8 by the door in view, light tree off; 6: people and things
 # that read as real (issues 32, 33); 7: the phone gripped at P1-P10, upright at the ears, portrait when read;
-# 8: short hair fuller on top with sideburns, brows darker than the hair, GREY hair darker
-RENDERER_VERSION = "isu-blender-8"
+# 8: short hair fuller on top with sideburns, brows darker than the hair, GREY hair darker; 9: locks over the bob
+RENDERER_VERSION = "isu-blender-9"
 
 # what the worker shows for a feature the scene space does not have (or that is inactive)
 DEFAULTS = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height": "H2", "driver_weight": "W2",
@@ -61,11 +61,8 @@ class BlenderRenderer:
         self.preset = get_preset(preset, threads=threads) if isinstance(preset, str) else preset
         if device is not None:   # None keeps a Preset's own device (a pool's copy of a resolved one)
             self.preset = replace(self.preset, device=resolve_render_device(device))
-        self.rig = load_render_camera(camera, extrinsics_from)   # refuses an unregistered pose
-        self.render_rig = self.rig.scaled(self.preset.scale)
-        self.plan = pinhole_plan(self.render_rig)
         self.cabin = cabin if isinstance(cabin, dict) else load_cabin(cabin)
-        self.seat_up = seat_objects_up(self.cabin, self.render_rig)   # fixed by the rig: the labels' `up`
+        self._look_through(load_render_camera(camera, extrinsics_from))   # refuses an unregistered pose
         self.channels = parse_channels(channels)
         self.space = space if isinstance(space, SceneSpace) else load_space(space or "isu-paper")
         self.parts = needed_parts(self.space)                        # whose footprints each frame needs
@@ -81,9 +78,24 @@ class BlenderRenderer:
         self.unrendered = sorted(set(self.space.names) - set(DEFAULTS))
         self.people = People(self.cabin, PeopleStore(people_cache) if people_cache else None)
         self.show_people = True     # False renders the cabin without driver and child (bench render's people cost)
-        self.imaging = self.rig.imaging       # the camera's imaging model; None = linear light as sRGB
         self._identity = self._identity_hash()
         self._device_confirmed = False
+
+    def _look_through(self, rig: Camera) -> None:
+        """Render through ``rig`` from now on: its pinhole plan and the labels' `up` (fixed by the camera)."""
+        self.rig = rig
+        self.render_rig = rig.scaled(self.preset.scale)
+        self.plan = pinhole_plan(self.render_rig)
+        self.seat_up = seat_objects_up(self.cabin, self.render_rig)
+        self.imaging = rig.imaging            # the camera's imaging model; None = linear light as sRGB
+
+    def use_camera(self, camera: Camera) -> None:
+        """Render the next scenes through ``camera`` (e.g. the rig jittered per scene, ``render/variety.py``):
+        frames, labels and cache keys follow it. A camera whose pose was never registered is refused."""
+        if camera is self.rig:
+            return
+        self._look_through(load_render_camera(camera))
+        self._identity = self._identity_hash()
 
     def _identity_hash(self) -> str:
         settings = self.preset.to_worker()

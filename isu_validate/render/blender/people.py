@@ -3,8 +3,8 @@ persistent meshes whose vertices are swapped per scene (a few milliseconds), nev
 
 A person is two objects that share one anny topology split at the neck - the head (with the hair:
 its own segmentation instance, ``driver_face`` for the driver) and the rest of the body - plus the
-hair shell. The driver also has the seat belt, laid on the body by the host, and holds the phone
-where the host placed it."""
+hair shell and, over a bob, its locks (tapered cards). The driver also has the seat belt, laid on the
+body by the host, and holds the phone where the host placed it."""
 from __future__ import annotations
 
 import bpy
@@ -48,10 +48,10 @@ class Person:
         if state != self.state_path:
             data = self.state = _load(state)
             for part, index in self.maps.items():
-                source = data["hair"] if part == "hair" else data["vertices"][index]
+                source = data[part] if part in ("hair", "locks") else data["vertices"][index]
                 mesh = self.parts[part].data
                 mesh.vertices.foreach_set("co", np.ascontiguousarray(source, np.float32).ravel())
-                if part != "hair":    # the expression's skin folds (none for a face at rest)
+                if part not in ("hair", "locks"):    # the expression's skin folds (none for a face at rest)
                     crease = data["crease"][index] if "crease" in data else np.zeros(len(index), np.float32)
                     mesh.attributes["crease"].data.foreach_set("value", np.ascontiguousarray(crease, np.float32))
                 mesh.update()
@@ -86,6 +86,12 @@ class Person:
                      np.zeros(len(topo["hair_faces"]), np.uint8), [hair_mat], None)
         self.parts["hair"] = self._object(f"{self.name}_hair", mesh, self.head_id)
         self.maps["hair"] = topo["hair_i"]    # only its length counts: the hair's vertices come whole
+        if len(topo.get("lock_faces", ())):   # a bob's locks: opaque cards in the hair's material
+            cards = topo["lock_faces"]
+            mesh = _mesh(f"{self.name}_locks", int(cards.max()) + 1, cards, np.zeros(len(cards), np.uint8),
+                         [hair_mat], None)
+            self.parts["locks"] = self._object(f"{self.name}_locks", mesh, self.head_id)
+            self.maps["locks"] = np.arange(int(cards.max()) + 1)   # its vertices come whole, as the hair's
 
     def _object(self, name, mesh, pid):
         obj = bpy.data.objects.new(name, mesh)

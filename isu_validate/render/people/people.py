@@ -150,6 +150,8 @@ def _topology(kind: str, style: str) -> dict:
     rest = body.evaluate({})
     candidates = regions.bone_weights(model, ("head", "neck")) > 0.5
     style = hair.hair_style(rest, faces, candidates, style, 0.6 if kind == "child" else 1.0)
+    shell = hair.hair_vertices(style, rest.vertices.astype(np.float64), hair.vertex_normals(rest.vertices, faces))
+    locks = hair.lock_roots(style, shell.astype(np.float64), rest)
     uv = model.texture_coordinates[model.face_texture_coordinate_indices].cpu().numpy()
     return {"faces": faces, "uv": uv.reshape(-1, 2).astype(np.float32),
             "eye_uv": regions.eye_uv(model, uv).reshape(-1, 2),
@@ -160,16 +162,23 @@ def _topology(kind: str, style: str) -> dict:
             "hands": regions.bone_weights(model, ("wrist", "finger", "metacarpal")) > 0.5,
             "carriers": belt.carrier_mask(model),
             "hair_i": style.i, "hair_j": style.j, "hair_t": style.t, "hair_faces": style.faces,
-            "hair_thickness": style.thickness}
+            "hair_thickness": style.thickness, "lock_face": locks.face, "lock_bary": locks.bary,
+            "lock_length": locks.length, "lock_width": locks.width, "lock_lift": locks.lift,
+            "lock_crown": np.int32(locks.crown), "lock_faces": hair.lock_faces(len(locks))}
 
 
 def _surface_state(posed, topo: dict) -> dict:
-    """What the worker swaps in: the body's vertices and its hair shell; and a few joints (JOINTS)."""
+    """What the worker swaps in: the body's vertices, its hair shell and the locks on it (a bob's cards); and
+    a few joints (JOINTS)."""
     vertices = posed.vertices
     normals = hair.vertex_normals(vertices.astype(np.float64), topo["faces"])
     style = hair.HairStyle("", topo["hair_i"], topo["hair_j"], topo["hair_t"], topo["hair_faces"],
                            topo["hair_thickness"], topo["field_scalp"])
-    return {"vertices": vertices.astype(np.float32), "hair": hair.hair_vertices(style, vertices, normals),
+    shell = hair.hair_vertices(style, vertices, normals)
+    locks = hair.Locks(topo["lock_face"], topo["lock_bary"], topo["lock_length"], topo["lock_width"],
+                       topo["lock_lift"], int(topo["lock_crown"]))
+    return {"vertices": vertices.astype(np.float32), "hair": shell,
+            "locks": hair.lock_vertices(locks, topo["hair_faces"], shell),
             "joints": np.array([posed.head(b) for b in JOINTS], np.float32)}
 
 
