@@ -2,8 +2,10 @@
 by side, each judged by what a reference ISU trained only on them does on the real sets.
 
 A recipe is how the training renders are made, or a model already trained from renders:
-- ``NAME=train:camera=RIG,space=SPACE,cabin=RIG,preset=P,n=N,held_out=N,seed=S`` (every key optional; the
-  bench's --n, --held-out, --preset and --seed are the defaults): ``reference train`` as it is, in
+- ``NAME=train:camera=RIG,space=SPACE,cabin=RIG,preset=P,n=N,held_out=N,seed=S,camera_jitter=...,
+  sensor_effects=...`` (every key optional; the bench's --n, --held-out, --preset and --seed are the defaults;
+  the last two as ``reference train --camera-jitter/--sensor-effects`` take them, commas and all):
+  ``reference train`` as it is, in
   DIR/recipes/NAME (renders kept, so an interrupted bench goes on);
 - ``NAME=model:DIR[,renders=FOLDER]``: a model ``reference train`` made elsewhere, e.g. with another
   renderer version's checkout (``reference train --out DIR --workdir W``; its held-out renders, W/held-out,
@@ -23,7 +25,9 @@ from pathlib import Path
 from ..errors import InputError
 from ..transfer.arguments import add_real_set_arguments, parse_groups
 
-TRAIN_KEYS = {"camera": str, "cabin": str, "space": str, "preset": str, "n": int, "held_out": int, "seed": int}
+TRAIN_KEYS = {"camera": str, "cabin": str, "space": str, "preset": str, "n": int, "held_out": int, "seed": int,
+              "camera_jitter": str, "sensor_effects": str}
+LISTS = ("camera_jitter", "sensor_effects")   # values that are lists themselves: pos=0.05,angle=5
 
 
 @dataclass
@@ -55,9 +59,13 @@ def parse_recipe(text: str) -> Recipe:
     if kind == "model":
         folder, _, extra = rest.partition(",renders=")
         return Recipe(name.strip(), kind, {"model": folder, "renders": extra or None})
-    options = {}
+    options, last = {}, None
     for pair in filter(None, rest.split(",")):
         key, eq, value = pair.partition("=")
+        if last in LISTS and key not in TRAIN_KEYS:   # the next item of camera_jitter's or sensor_effects' list
+            options[last] += "," + pair
+            continue
+        last = key
         if not eq or key not in TRAIN_KEYS:
             raise InputError(f"--recipe {name}: {pair!r} is not KEY=VALUE with KEY one of {', '.join(TRAIN_KEYS)}")
         try:
@@ -104,10 +112,12 @@ def _model(recipe: Recipe, folder: Path, args) -> tuple[Path, Path | None, str]:
 def _train(recipe: Recipe, folder: Path, args) -> tuple[Path, Path, str]:
     from ..reference.training import train_reference
     from ..render import RENDERER_VERSION, open_renderer
+    from ..render.variety import Variety, vary
     from ..space import load_space
 
     o = {"camera": "default", "cabin": "default", "space": "isu-paper", "preset": args.preset, "n": args.n,
-         "held_out": args.held_out, "seed": args.seed, **recipe.options}
+         "held_out": args.held_out, "seed": args.seed, "camera_jitter": None, "sensor_effects": None,
+         **recipe.options}
     model, made = folder / "model", json.dumps(o, sort_keys=True)
     if (folder / "recipe.json").is_file() and (folder / "recipe.json").read_text() != made:
         raise InputError(f"{folder} holds recipe {recipe.name} made with other settings "
@@ -118,11 +128,13 @@ def _train(recipe: Recipe, folder: Path, args) -> tuple[Path, Path, str]:
     if (model / "heads.npz").is_file():
         return model, folder / "held-out", description
     space = load_space(o["space"])
-    renderer = open_renderer(preset=o["preset"], camera=o["camera"], cabin=o["cabin"], space=space,
-                             cache_dir=folder / "cache", log_dir=folder / "logs", device=args.render_device)
+    variety = Variety.parse(o["camera_jitter"], o["sensor_effects"], o["seed"])
+    renderer = vary(open_renderer(preset=o["preset"], camera=o["camera"], cabin=o["cabin"], space=space,
+                                  cache_dir=folder / "cache", log_dir=folder / "logs", device=args.render_device),
+                    variety)
     try:
         train_reference(space, renderer, model, folder, o["n"], o["held_out"], o["seed"], o["preset"],
-                        renderer_version=RENDERER_VERSION, device=args.device)
+                        renderer_version=RENDERER_VERSION, device=args.device, variety=variety.describe())
     finally:
         renderer.close()
     return model, folder / "held-out", description
