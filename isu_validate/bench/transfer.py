@@ -86,7 +86,8 @@ def run(args) -> int:
         model, renders, made = _model(recipe, folder, args)
         trained_s = time.perf_counter() - started
         summary = _measure(args, recipe, model, renders, folder / "transfer")
-        rows.append({"recipe": recipe.name, "made": made, "train_s": round(trained_s, 1),
+        rows.append({"recipe": recipe.name, "made": made,
+                     "train_s": round(trained_s, 1) if recipe.kind == "train" else None,   # None: trained elsewhere
                      "transfer_s": summary["seconds"], "summary": summary})
     table = format_table(rows)
     print(table)
@@ -163,7 +164,8 @@ def format_table(rows: list[dict]) -> str:
     lines = []
     for r in rows:
         s = r["summary"]
-        lines.append(f"{r['recipe']}: {r['made']}  (train {r['train_s']} s, transfer {r['transfer_s']} s)")
+        trained = f"train {r['train_s']} s" if r["train_s"] is not None else "trained elsewhere"
+        lines.append(f"{r['recipe']}: {r['made']}  ({trained}, transfer {r['transfer_s']} s)")
         for name, real in s["sets"].items():
             kid = (s.get("realism") or {}).get(name)
             cells = [f"{f} BA {_ci(sc)}" for f, sc in real["scores"].items()]
