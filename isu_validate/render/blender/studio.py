@@ -147,7 +147,8 @@ class Studio:
     # ------------------------------------------------------------------ per scene
     def apply(self, features: dict, extras: dict, people: dict) -> None:
         """``people``: the host's topology and state files of the driver and the child (None: absent)."""
-        self.lighting.apply(features["external_light"], features["car_lights"])
+        self.lighting.apply(features["external_light"], features["car_lights"], features["surroundings"],
+                            features["sun_direction"])
         if people.get("driver") is None:
             self.driver.hide()
         else:
