@@ -184,7 +184,7 @@ def test_a_space_extends_another_adding_features_and_keeping_its_constraints(tmp
     diverse = load_space("isu-diverse")
     assert diverse.names[:len(SPACE.names)] == SPACE.names
     assert set(diverse.names) - set(SPACE.names) == {"driver_skin_tone", "driver_hair_colour", "driver_hair_style",
-                                                     "surroundings", "sun_direction"}
+                                                     "surroundings", "sun_direction", "cabin_trim", "seat_material"}
     looks = ("driver_skin_tone", "driver_hair_colour", "driver_hair_style")
     assert not any(diverse.features[n].predicted for n in looks)
     assert len(diverse.constraints) == len(SPACE.constraints)

@@ -52,7 +52,7 @@ DEFAULTS = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height
             # the people's looks: not features of the paper's space (isu-paper renders these); isu-diverse varies them
             "driver_skin_tone": "MEDIUM", "driver_hair_colour": "BROWN", "driver_hair_style": "BY_GENDER",
             # the world outside and the car's style: likewise (rigs/cabins/default.toml [lighting.surroundings])
-            "surroundings": "TOWN", "sun_direction": "FRONT"}
+            "surroundings": "TOWN", "sun_direction": "FRONT", "cabin_trim": "GREY", "seat_material": "FABRIC"}
 
 
 class BlenderRenderer:

@@ -15,6 +15,7 @@ from ..labels import INSTANCE_ID
 from . import mesh as M
 
 WARM = (1.0, 0.78, 0.55)   # ~3000 K interior lamps
+LAMP_SPREAD_DEG = 180.0    # the lamps shine down with a flush diffuser's cosine falloff (Cycles' area-light spread)
 # where the sun shines in from, as its azimuth in the cabin frame (x forward, y to the driver's left)
 SUN_AZIMUTH_DEG = {"FRONT": 0.0, "LEFT": 90.0, "BEHIND": 180.0, "RIGHT": -90.0}
 SUN_ELEVATION_DEG = (12.0, 60.0)   # the HDRI's own sun height, kept within: grazing or overhead suns light nothing
@@ -138,10 +139,15 @@ class Lighting:
         lamps, lenses = [], []
         for key in ("interior_light", "rear_light"):
             pos = Vector(anchors[key])
-            data = bpy.data.lights.new(key, "POINT")
-            data.color, data.shadow_soft_size = WARM, 0.06
+            # a lamp flush in the headliner shines down through its lens, not round: an area light facing
+            # down whose light fades out towards LAMP_SPREAD_DEG lights the laps and seats below it more than
+            # the faces beside it (a point light there washed the driver's face out at night: it is ~0.45 m
+            # from the front lamp, facing it)
+            data = bpy.data.lights.new(key, "AREA")
+            data.shape, data.size, data.size_y = "RECTANGLE", 0.12, 0.20
+            data.color, data.spread = WARM, math.radians(LAMP_SPREAD_DEG)
             obj = bpy.data.objects.new(key, data)
-            obj.location = pos - Vector((0, 0, 0.05))
+            obj.location = pos - Vector((0, 0, 0.012))   # just under the lens, facing down (its local -z)
             coll.objects.link(obj)
             lamps.append(obj)
             lenses.append(M.box(f"{key}_lens", pos, (0.14, 0.22, 0.02), lens_mat, coll,
