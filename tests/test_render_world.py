@@ -14,15 +14,15 @@ import numpy as np
 import pytest
 
 from capture.camera import load_camera
-from isu_validate.render import DEFAULTS, Preset, open_renderer
+from isu_validate.render import DEFAULTS, open_renderer
 from isu_validate.render.cabin import (STUDIO_LIGHTS, CabinRigError, _check_lighting, environment_for,
                                        environments, load_cabin)
 from isu_validate.render.labels import INSTANCE_ID
 from isu_validate.space import load_space
 
 ROOT = Path(__file__).resolve().parents[1]
-# 200x150, 2 samples, no denoiser (as tests/test_render.py): enough to see a sky, fast on 2 shared cores
-TEST_PRESET = Preset("test", 0.3125, 2, False, "NONE", 2, 1, 1, 3.0, 1.5)
+# the draft preset (320x240, 1 sample, denoised): what a window shows in the cheapest frames a run makes
+TEST_PRESET = "draft"
 NEW = ("surroundings", "sun_direction", "cabin_trim", "seat_material")
 SCENE = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height": "H2", "driver_weight": "W2",
          "phone_position": "NONE", "seat_belt": "YES", "tshirt_colour": "WHITE", "child_seat": "NO",
