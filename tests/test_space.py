@@ -183,7 +183,8 @@ def test_a_scene_file_holding_a_list_is_a_clear_error_not_a_traceback(tmp_path, 
 def test_a_space_extends_another_adding_features_and_keeping_its_constraints(tmp_path):
     diverse = load_space("isu-diverse")
     assert diverse.names[:len(SPACE.names)] == SPACE.names
-    assert set(diverse.names) - set(SPACE.names) == {"driver_skin_tone", "driver_hair_colour", "driver_hair_style"}
+    assert set(diverse.names) - set(SPACE.names) == {"driver_skin_tone", "driver_hair_colour", "driver_hair_style",
+                                                     "surroundings", "sun_direction", "cabin_trim", "seat_material"}
     looks = ("driver_skin_tone", "driver_hair_colour", "driver_hair_style")
     assert not any(diverse.features[n].predicted for n in looks)
     assert len(diverse.constraints) == len(SPACE.constraints)
