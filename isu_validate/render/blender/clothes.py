@@ -31,10 +31,11 @@ TROUSERS = {"NAVY": (0.02, 0.03, 0.07), "BLACK": _linear(26, 26, 28), "GREY": _l
             "DENIM": _linear(60, 80, 120), "BEIGE": _linear(186, 164, 126)}
 CAP = _linear(44, 62, 112)
 _PRINTS = ("STRIPES", "CHECK", "LOGO")
-# rest-body coordinates (m, the hips' joint at the origin, the body facing -Y) of the chest logo and the
-# shirt's button line
-_LOGO = (0.085, 0.42)
+# rest-body coordinates (m, the hips' joint at the origin, the body facing -Y) of the chest print's middle
+# and the shirt's button step
+_LOGO = (0.0, 0.40)
 _BUTTON_STEP = 0.075
+_STRINGS_END = 0.38       # how low (rest z) a hoodie's drawstrings hang
 
 
 class Outfit:
@@ -80,7 +81,7 @@ class Outfit:
         if f.get("driver_cap") == "YES":
             shown |= {"cap", "brim"}
         if f.get("driver_watch") == "YES":
-            shown.add("watch")
+            shown |= {"watch", "band"}
         for part, obj in objects.items():
             obj.hide_render = part not in shown
         self._colour(f)
@@ -94,17 +95,18 @@ class Outfit:
             top.node_tree.nodes[f"print_{kind.lower()}"].outputs[0].default_value = float(
                 f.get("driver_top_print", "PLAIN") == kind)
         top.node_tree.nodes["buttons"].outputs[0].default_value = float(f.get("driver_top") == "SHIRT")
+        top.node_tree.nodes["hoodie"].outputs[0].default_value = float(f.get("driver_top") == "HOODIE")
         _set(self.fabric["outer"], "colour_base", JACKET[f.get("driver_jacket_colour", "BLACK")])
         _set(self.fabric["trousers"], "colour_base", TROUSERS[f.get("driver_trousers_colour", "NAVY")])
         _set(self.fabric["cap"], "colour_base", CAP)
 
     def _build(self, outfit: dict) -> dict[str, bpy.types.Object]:
         objects = {}
-        for slot in [*map(str, outfit["slots"]), "cap"]:
+        for slot in [*map(str, outfit["slots"]), "cap", "band"]:
             tri = outfit[f"{slot}_faces"]
             mesh = M.arrays_mesh(f"{self.name}_{slot}", len(outfit[f"{slot}_i"]), tri,
                                  smooth=~outfit[f"{slot}_band"].astype(bool))
-            mesh.materials.append(self.fabric[slot])
+            mesh.materials.append(self.strap if slot == "band" else self.fabric[slot])
             rest = mesh.attributes.new("rest", "FLOAT_VECTOR", "POINT")
             rest.data.foreach_set("vector", np.ascontiguousarray(outfit[f"{slot}_rest"], np.float32).ravel())
             mesh.attributes.new("fold_u", "FLOAT", "POINT").data.foreach_set(
@@ -112,16 +114,11 @@ class Outfit:
             mesh.attributes.new("crumple", "FLOAT", "POINT")
             objects[slot] = self._object(mesh, self.head_id if slot == "cap" else self.body_id)
         for part, mats in (("glasses", self.frame), ("sunglasses", self.frame), ("lenses", self.lens),
-                           ("brim", self.fabric["cap"]), ("watch", self.strap)):
+                           ("brim", self.fabric["cap"]), ("watch", self.steel)):
             tri = outfit[f"{part}_f"]
             mesh = M.arrays_mesh(f"{self.name}_{part}", len(outfit[f"{part}_v"]), tri,
                                  smooth=np.full(len(tri), part != "brim"))
             mesh.materials.append(mats)
-            if part == "watch":     # the band's strap, the case of steel
-                mesh.materials.append(self.steel)
-                case = np.zeros(len(tri), np.int32)
-                case[-_CASE_TRIANGLES:] = 1
-                mesh.polygons.foreach_set("material_index", case)
             objects[part] = self._object(mesh, self.body_id if part == "watch" else self.head_id)
         return objects
 
@@ -131,9 +128,6 @@ class Outfit:
         obj.hide_render = True
         self.coll.objects.link(obj)
         return obj
-
-
-_CASE_TRIANGLES = 4 * 20   # accessories._disc's triangles (the watch's case, its last part)
 
 
 def _load(path: str) -> dict:
@@ -174,8 +168,9 @@ def _fabric(name: str) -> bpy.types.Material:
     base = N.rgb(nodes, "colour_base", TOP["WHITE"])
     ink = N.rgb(nodes, "colour_print", PRINT["NAVY"])
     stripes = _bands(nodes, links, z, 0.030, 0.25)
-    check = N.math(nodes, links, "MAXIMUM", _bands(nodes, links, x, 0.045, 0.55), _bands(nodes, links, z, 0.045, 0.55))
-    check = N.math(nodes, links, "MULTIPLY", check, 0.75)
+    # gingham: two crossing sets of bands, half-tone where one runs, full ink where they cross
+    check = N.math(nodes, links, "MULTIPLY", N.math(nodes, links, "ADD", _bands(nodes, links, x, 0.045, 0.5),
+                                                   _bands(nodes, links, z, 0.045, 0.5)), 0.5)
     front = N.math(nodes, links, "LESS_THAN", y, 0.0)
     logo = N.math(nodes, links, "MULTIPLY", _logo(nodes, links, x, z), front)
     ink_share = N.value(nodes, 0.0)
@@ -184,21 +179,33 @@ def _fabric(name: str) -> bpy.types.Material:
     colour = N.mix(nodes, links, ink_share, base, ink)
     buttons = N.math(nodes, links, "MULTIPLY", _buttons(nodes, links, x, z, front), _switch(nodes, "buttons"))
     colour = N.mix(nodes, links, buttons, colour, (0.55, 0.55, 0.52))
+    strings = N.math(nodes, links, "MULTIPLY", _hoodie(nodes, links, x, z, front), _switch(nodes, "hoodie"))
+    colour = N.mix(nodes, links, strings, colour, (0.42, 0.42, 0.40))
     # a knit is never one flat colour: fibres a couple of millimetres across, a little lighter and darker
     knit = N.noise(nodes, links, 450.0, 1.0)
     colour = N.multiply(nodes, links, 1.0, colour, N.map_range(nodes, links, knit, 0.9, 1.05))
     # folds: ridges a few centimetres apart across the bend, only where the body compresses the cloth
     crumple = N.attribute(nodes, "crumple")
-    phase = N.math(nodes, links, "MULTIPLY_ADD", x, 40.0, N.math(nodes, links, "MULTIPLY", y, 25.0))
+    wobble = N.noise(nodes, links, 9.0, 1.0, rest.outputs["Vector"])       # folds are never parallel lines
+    phase = N.math(nodes, links, "MULTIPLY_ADD", wobble, 9.0, N.math(nodes, links, "MULTIPLY", x, 20.0))
     wave = N.math(nodes, links, "SINE", N.math(nodes, links, "MULTIPLY_ADD", N.attribute(nodes, "fold_u"),
                                                2 * math.pi / 0.028, phase))
+    # ... in patches: a fold runs out after a few centimetres
+    patches = N.map_range(nodes, links, N.noise(nodes, links, 7.0, 1.0, rest.outputs["Vector"]), 0.0, 1.0, 0.4, 0.6)
+    depth = N.math(nodes, links, "MULTIPLY", crumple, patches)
     ridges = N.math(nodes, links, "MULTIPLY", N.math(nodes, links, "MULTIPLY_ADD", wave, 0.5, 0.5),
-                    N.math(nodes, links, "ADD", crumple, 0.15))
-    colour = N.multiply(nodes, links, N.math(nodes, links, "MULTIPLY", crumple, 0.35), colour,
+                    N.math(nodes, links, "MULTIPLY", depth, 1.5))
+    colour = N.multiply(nodes, links, N.math(nodes, links, "MULTIPLY", depth, 0.25), colour,
                         N.mix(nodes, links, N.math(nodes, links, "MULTIPLY_ADD", wave, 0.5, 0.5), (0.6, 0.6, 0.6),
                               (1.0, 1.0, 1.0)))
     links.new(colour, bsdf.inputs["Base Color"])
-    links.new(N.bump(nodes, links, ridges, 0.6, 0.003), bsdf.inputs["Normal"])
+    # and the soft, uneven drape every garment has, a few centimetres across, under the ridges
+    drape = nodes.new("ShaderNodeBump")
+    drape.inputs["Strength"].default_value, drape.inputs["Distance"].default_value = 0.5, 0.004
+    links.new(N.noise(nodes, links, 14.0, 2.0, rest.outputs["Vector"]), drape.inputs["Height"])
+    bump = N.bump(nodes, links, ridges, 1.0, 0.004)
+    links.new(drape.outputs["Normal"], bump.node.inputs["Normal"])
+    links.new(bump, bsdf.inputs["Normal"])
     return mat
 
 
@@ -209,17 +216,31 @@ def _bands(nodes, links, coordinate, period: float, share: float):
 
 
 def _logo(nodes, links, x, z):
-    """A round badge on the left of the chest: a ring round a dot."""
+    """A round print in the middle of the chest: a ring round a disc."""
     dx = N.math(nodes, links, "SUBTRACT", x, _LOGO[0])
     dz = N.math(nodes, links, "SUBTRACT", z, _LOGO[1])
-    r = N.math(nodes, links, "SQRT", N.math(nodes, links, "MULTIPLY_ADD", dx, dx, N.math(nodes, links, "MULTIPLY", dz, dz)))
-    ring = N.math(nodes, links, "MULTIPLY", N.math(nodes, links, "LESS_THAN", r, 0.034),
-                  N.math(nodes, links, "GREATER_THAN", r, 0.024))
-    return N.math(nodes, links, "MAXIMUM", ring, N.math(nodes, links, "LESS_THAN", r, 0.013))
+    r = _length(nodes, links, dx, dz)
+    ring = N.math(nodes, links, "MULTIPLY", N.math(nodes, links, "LESS_THAN", r, 0.065),
+                  N.math(nodes, links, "GREATER_THAN", r, 0.050))
+    return N.math(nodes, links, "MAXIMUM", ring, N.math(nodes, links, "LESS_THAN", r, 0.032))
+
+
+def _hoodie(nodes, links, x, z, front):
+    """A hoodie's two drawstrings hanging from its neckline, 4 cm either side of the middle."""
+    across = N.math(nodes, links, "LESS_THAN", N.math(nodes, links, "ABSOLUTE", N.math(
+        nodes, links, "SUBTRACT", N.math(nodes, links, "ABSOLUTE", x), 0.04)), 0.003)
+    down = N.math(nodes, links, "GREATER_THAN", z, _STRINGS_END)
+    return N.math(nodes, links, "MULTIPLY", N.math(nodes, links, "MULTIPLY", across, down), front)
 
 
 def _buttons(nodes, links, x, z, front):
     """A shirt's buttons down the middle of its front."""
     dz = N.math(nodes, links, "PINGPONG", z, _BUTTON_STEP / 2)     # 0 at each button's height
-    r = N.math(nodes, links, "SQRT", N.math(nodes, links, "MULTIPLY_ADD", x, x, N.math(nodes, links, "MULTIPLY", dz, dz)))
+    r = _length(nodes, links, x, dz)
     return N.math(nodes, links, "MULTIPLY", N.math(nodes, links, "LESS_THAN", r, 0.0055), front)
+
+
+def _length(nodes, links, a, b):
+    """sqrt(a² + b²)."""
+    squares = N.math(nodes, links, "MULTIPLY_ADD", a, a, N.math(nodes, links, "MULTIPLY", b, b))
+    return N.math(nodes, links, "SQRT", squares)

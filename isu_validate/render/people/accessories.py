@@ -1,23 +1,25 @@
 """What drivers wear besides clothes: glasses, sunglasses, a cap, a watch; modelled procedurally.
 
-Glasses, sunglasses and the watch are rigid: modelled once on the standing rest body of a kind of person
+Glasses, sunglasses and the watch's case are rigid: modelled once on the standing rest body of a kind of person
 (the eyes, the left forearm where it meets the wrist) and carried to a posed body by the similarity
 (rotation, scale, shift) that best maps the rest positions of their anchor vertices onto the posed ones
 (the skull above the brows for the head; the forearm's end for the watch). The cap's crown is cut from
 the head's own skin like a garment (``garments.py``), lifted over the hair, so it follows the head; its
-brim is rigid like the glasses. Per vertex of the cap's crown, the lift is the hair's thickness there
-plus a little, so a cap sits on the hair of any style."""
+brim is rigid like the glasses; the watch's band is cut from the forearm's skin likewise. Per vertex of the
+cap's crown, the lift is the hair's thickness there plus a little, so a cap sits on the hair of any style."""
 from __future__ import annotations
 
 import numpy as np
 
-from .garments import Garment, cut_piece, Piece, dress
+from .garments import Garment, Piece, along_arm, cut_piece, dress
 from .regions import bone_weights
 from .skeleton import Posed
+from .surface import Surface
 
 ACCESSORIES = ("glasses", "sunglasses", "cap", "watch")
 RIGID = {"glasses": "head", "sunglasses": "head", "brim": "head", "watch": "wrist"}
 _FRAME_R, _BAND_W = 0.0016, 0.018
+_WATCH_AT = 1.96      # along the arm (1 the elbow, 2 the wrist): where the watch's middle is
 
 
 def rest_accessories(model, rest: Posed, faces: np.ndarray, hair_lift: np.ndarray) -> dict:
@@ -33,15 +35,16 @@ def rest_accessories(model, rest: Posed, faces: np.ndarray, hair_lift: np.ndarra
     forearm = np.flatnonzero(bone_weights(model, ("lowerarm02.L",)) > 0.6)
     out.update(anchor_head=skull.astype(np.int32), anchor_head_rest=v[skull].astype(np.float32),
                anchor_wrist=forearm.astype(np.int32), anchor_wrist_rest=v[forearm].astype(np.float32))
-    frame, lens = _glasses(eyes, s, 0.026, 0.018)
+    face = Surface(v, faces)
+    frame, lens = _clear_of_face(face, *_glasses(eyes, s, 0.024, 0.017))
     out.update(_named("glasses", frame))
-    big_frame, big_lens = _glasses(eyes, s, 0.029, 0.021)
+    big_frame, big_lens = _clear_of_face(face, *_glasses(eyes, s, 0.026, 0.020))
     out.update(**_named("sunglasses", big_frame), **_named("lenses", big_lens))
     crown = _crown(rest, v, s, hair_lift, faces)
     out.update(crown.to_arrays("cap"))
     worn, _ = dress(crown, v, faces)
     out.update(_named("brim", _brim(worn[crown.copy_of >= 0].astype(np.float64), eyes, s)))
-    out.update(_named("watch", _watch(rest, v, model)))
+    out.update(_named("watch", _watch_case(rest, v, model)), **_watch_band(rest, v, model, faces).to_arrays("band"))
     return out
 
 
@@ -76,17 +79,24 @@ def _glasses(eyes, s: float, half_w: float, half_h: float):
     parts, lenses = [], []
     for eye in eyes:
         out_x = np.sign(eye[0])
-        centre = eye + np.array([0.0, -0.024 * s, -0.003 * s])
+        centre = eye + np.array([out_x * 0.003 * s, -0.026 * s, -0.003 * s])
         ring = _rounded_rect(centre, half_w * s, half_h * s, wrap=0.004 * s)
         parts.append(_tube(ring, _FRAME_R * s, closed=True))
         lenses.append(_fan(ring, centre + np.array([0.0, -0.002 * s, 0.0])))
         hinge = centre + np.array([out_x * (half_w + 0.004) * s, 0.004 * s, 0.004 * s])
         ear = eye + np.array([out_x * 0.040 * s, 0.095 * s, 0.0])
         parts.append(_tube(np.array([hinge, hinge + (ear - hinge) * 0.5, ear]), _FRAME_R * s, closed=False))
-    inner = [eye + np.array([-np.sign(eye[0]) * half_w * 0.92 * s, -0.024 * s, 0.006 * s]) for eye in eyes]
+    inner = [eye + np.array([np.sign(eye[0]) * (0.003 - half_w * 0.92) * s, -0.026 * s, 0.006 * s]) for eye in eyes]
     mid = (inner[0] + inner[1]) / 2 + np.array([0.0, -0.002 * s, 0.004 * s])
     parts.append(_tube(np.array([inner[0], mid, inner[1]]), _FRAME_R * s, closed=False))
     return _join(parts), _join(lenses)
+
+
+def _clear_of_face(face: Surface, frame, lens, margin: float = 0.006):
+    """Glasses moved forward until their lenses' rims clear the rest face (brow ridge, nose) by ``margin``:
+    a posed face of another build or expression keeps some of it."""
+    shift = np.array([0.0, -max(0.0, margin - face.distance(lens[0].astype(np.float64)).min()), 0.0])
+    return (frame[0] + shift, frame[1]), (lens[0] + shift, lens[1])
 
 
 def _rounded_rect(centre, half_w, half_h, wrap, n: int = 28) -> np.ndarray:
@@ -126,33 +136,28 @@ def _brim(rim: np.ndarray, eyes, s: float) -> tuple[np.ndarray, np.ndarray]:
     return _slab(top, 0.004 * s)
 
 
-def _watch(rest: Posed, v: np.ndarray, model) -> tuple[np.ndarray, np.ndarray]:
-    """A band round the left forearm just above the wrist, and a round case on the back of the wrist."""
+def _watch_band(rest: Posed, v: np.ndarray, model, faces: np.ndarray) -> Garment:
+    """The watch's band: cut from the left forearm's skin just above the wrist (it follows the forearm's
+    twist), lifted a few millimetres."""
+    along = along_arm(v, rest)
+    left = (v[:, 0] > 0) & (bone_weights(model, ("lowerarm", "wrist")) > 0.5)
+    field = np.where(left, _BAND_W / 2 - np.abs(along - _WATCH_AT) * 0.26, -1.0)
+    return cut_piece(Piece(field, np.full(len(v), 0.0025), v[:, 2]), faces, v)
+
+
+def _watch_case(rest: Posed, v: np.ndarray, model) -> tuple[np.ndarray, np.ndarray]:
+    """The watch's round case on the back of the wrist (rigid: placed like the glasses)."""
     b, c = rest.head("lowerarm01.L"), rest.head("wrist.L")
     axis = (c - b) / np.linalg.norm(c - b)
-    at = b + (c - b) * 0.90
-    arm = bone_weights(model, ("lowerarm",)) > 0.3
-    near = arm & (np.abs((v - at) @ axis) < 0.012)
-    e1 = np.cross(axis, [0.0, 0.0, 1.0])
-    e1 /= np.linalg.norm(e1)
-    e2 = np.cross(axis, e1)
-    rel = v[near] - at
-    ang = np.arctan2(rel @ e2, rel @ e1)
-    radius = np.hypot(rel @ e1, rel @ e2)
-    a = np.linspace(-np.pi, np.pi, 32, endpoint=False)
-    r = np.array([radius[np.abs(np.angle(np.exp(1j * (ang - x)))) < 0.35].max(initial=radius.mean()) for x in a])
-    r = r + 0.0025
-    ring = lambda off, grow: at + axis * off + (np.outer(np.cos(a), e1) + np.outer(np.sin(a), e2)) * (r + grow)[:, None]
-    band = np.stack([ring(-_BAND_W / 2, 0.0), ring(_BAND_W / 2, 0.0)], axis=1)
-    band_mesh = _slab(np.concatenate([band, band[:1]]), 0.0025, outward=True, centre=at)
+    at = b + (c - b) * (_WATCH_AT - 1.0)
     hand = bone_weights(model, ("wrist", "finger", "metacarpal")) > 0.5
-    h = v[hand] - v[hand].mean(axis=0)
+    h = v[hand & (v[:, 0] > 0)] - v[hand & (v[:, 0] > 0)].mean(axis=0)
     back = np.linalg.svd(h, full_matrices=False)[2][2]            # the hand's flat side...
-    back = back * np.sign(back[0])                                 # ...facing out of the body (the back of it)
-    k = int(np.argmax(np.cos(a - np.arctan2(back @ e2, back @ e1))))
-    case_centre = at + (np.cos(a[k]) * e1 + np.sin(a[k]) * e2) * (r[k] + 0.004)
-    case = _disc(case_centre, np.cos(a[k]) * e1 + np.sin(a[k]) * e2, axis, 0.019, 0.008)
-    return _join([band_mesh, case])
+    back = back - axis * (back @ axis)
+    back = back / np.linalg.norm(back) * np.sign(back[0])         # ...facing out of the body (its back)
+    skin = v[np.linalg.norm(np.cross(v - at, axis), axis=1) < 0.05]
+    reach = ((skin - at) @ back)[np.abs((skin - at) @ axis) < 0.01].max()
+    return _disc(at + back * (reach + 0.004), back, axis, 0.019, 0.008)
 
 
 # ---------------------------------------------------------------------- mesh helpers
@@ -171,7 +176,8 @@ def _tube(path: np.ndarray, radius: float, closed: bool, sides: int = 6) -> tupl
         k2 = (k + 1) % n
         for m in range(sides):
             m2 = (m + 1) % sides
-            faces += [[k * sides + m, k2 * sides + m, k2 * sides + m2], [k * sides + m, k2 * sides + m2, k * sides + m2]]
+            a, b, c, d = k * sides + m, k2 * sides + m, k2 * sides + m2, k * sides + m2
+            faces += [[a, b, c], [a, c, d]]
     return verts.reshape(-1, 3), np.array(faces, np.int32)
 
 

@@ -32,10 +32,10 @@ _ARM_M = 0.28         # metres of arm per unit of "along the arm" (0 shoulder, 1
 # per top: sleeve end (along the arm), ease (m) of body and sleeves, hem below the hip joints and how far
 # the hem flares out, and the pieces it adds
 _TOP = {"TSHIRT": dict(sleeve=0.45, ease=0.004, hem=0.10, flare=0.010, sleeve_flare=0.008),
-        "LONG_SLEEVE": dict(sleeve=1.88, ease=0.0035, hem=0.10, flare=0.008, sleeve_flare=0.0),
-        "SHIRT": dict(sleeve=1.86, ease=0.005, hem=0.11, flare=0.010, sleeve_flare=0.0, collar=(0.030, 0.010, 0.015)),
-        "HOODIE": dict(sleeve=1.88, ease=0.010, hem=0.11, flare=0.006, sleeve_flare=0.0, hood=True),
-        "JACKET": dict(sleeve=1.87, ease=0.016, hem=0.08, flare=0.008, sleeve_flare=0.0, collar=(0.045, 0.018, 0.05),
+        "LONG_SLEEVE": dict(sleeve=1.85, ease=0.0035, hem=0.10, flare=0.008, sleeve_flare=0.0),
+        "SHIRT": dict(sleeve=1.85, ease=0.005, hem=0.11, flare=0.010, sleeve_flare=0.0, collar=(0.030, 0.010, 0.015)),
+        "HOODIE": dict(sleeve=1.85, ease=0.010, hem=0.11, flare=0.006, sleeve_flare=0.0, hood=True),
+        "JACKET": dict(sleeve=1.85, ease=0.016, hem=0.08, flare=0.008, sleeve_flare=0.0, collar=(0.045, 0.018, 0.05),
                        open_front=(0.040, 0.085))}
 TROUSERS = dict(ease=0.005, flare=0.010)
 
@@ -97,12 +97,13 @@ class _RestFrame:
         self.rest = rest
         self.arm = bone_weights(model, _ARM) > 0.5
         self.neck_skin = bone_weights(model, ("neck",)) > 0.5
-        self.along = _along_arm(self.v, rest)
+        self.along = along_arm(self.v, rest)
         self.root = rest.head("root")
         self.neck = rest.head("neck01")
         z, y = self.v[:, 2], self.v[:, 1]
         # crew neck: lower in front (the body faces -Y at rest), up at the back
-        self.neckline = self.neck[2] - 0.015 * self.s + 0.02 * self.s * np.clip((y - self.neck[1]) / (0.06 * self.s), -1, 1)
+        back = np.clip((y - self.neck[1]) / (0.06 * self.s), -1, 1)
+        self.neckline = self.neck[2] - 0.015 * self.s + 0.02 * self.s * back
         self.front = y < self.neck[1]
         self.z = z
 
@@ -147,17 +148,22 @@ class _RestFrame:
         return Piece(field, lift, z)
 
     def _hood(self, ease: float) -> Piece:
-        """A hood lying on the upper back: a soft heap of cloth behind the neck, thickest in its middle."""
-        s = self.s
+        """A hood lying down: a roll of cloth round the back and sides of the neck, heaped on the upper back."""
+        s, v = self.s, self.v
         centre = self.neck + np.array([0.0, 0.05, -0.07]) * s
-        r = np.linalg.norm((self.v - centre) / (np.array([0.14, 0.12, 0.11]) * s), axis=1)
-        behind = self.v[:, 1] > self.neck[1] - 0.01 * s
-        field = np.where(behind & ~self.arm, (1.0 - r) * 0.1 * s, -1.0)
-        lift = ease + 0.004 + 0.030 * np.clip(1.0 - r ** 2, 0.0, 1.0)
+        r = np.linalg.norm((v - centre) / (np.array([0.14, 0.12, 0.11]) * s), axis=1)
+        heap = np.where(v[:, 1] > self.neck[1] - 0.01 * s, (1.0 - r) * 0.1 * s, -1.0)
+        # the roll: a band just under the neckline, from the back round to the sides (it thins out there)
+        middle = self.neckline - 0.03 * s
+        side = np.clip((v[:, 1] - (self.neck[1] - 0.04 * s)) / (0.05 * s), 0.0, 1.0)
+        roll = np.where(v[:, 1] > self.neck[1] - 0.04 * s, 0.035 * s - np.abs(v[:, 2] - middle), -1.0)
+        field = np.where(self.arm, -1.0, np.maximum(heap, roll))
+        round_neck = np.clip(1.0 - ((v[:, 2] - middle) / (0.035 * s)) ** 2, 0.0, 1.0)
+        lift = ease + 0.004 + np.maximum(0.030 * np.clip(1.0 - r ** 2, 0.0, 1.0), 0.026 * side * round_neck)
         return Piece(field, lift, self.z)
 
 
-def _along_arm(v: np.ndarray, rest: Posed) -> np.ndarray:
+def along_arm(v: np.ndarray, rest: Posed) -> np.ndarray:
     """Per vertex, where it lies along its arm: 0 at the shoulder joint, 1 at the elbow, 2 at the wrist."""
     upper = _along_upper_arm(v, rest)
     out = upper.copy()
@@ -230,7 +236,8 @@ def dress(garment: Garment, vertices: np.ndarray, faces: np.ndarray, normals: np
     n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
     shell = (garment.copy_of < 0) & ~garment.inner
     crumple = _crumple(garment, skin, shell)
-    billow = 0.5 + 0.5 * np.sin(2 * np.pi * garment.fold_u / 0.07 + 40.0 * garment.rest[:, 0] + 25.0 * garment.rest[:, 1])
+    phase = 40.0 * garment.rest[:, 0] + 25.0 * garment.rest[:, 1]
+    billow = 0.5 + 0.5 * np.sin(2 * np.pi * garment.fold_u / 0.07 + phase)
     lift = garment.lift + np.where(shell, (0.0015 + 0.006 * crumple) * billow, 0.0)
     out = skin + n * lift[:, None]
     out = _bridge(garment, out, n, shell)
@@ -240,28 +247,34 @@ def dress(garment: Garment, vertices: np.ndarray, faces: np.ndarray, normals: np
     return out.astype(np.float32), crumple.astype(np.float32)
 
 
-def standoff(garments: list[tuple[Garment, np.ndarray]], vertices: np.ndarray) -> np.ndarray:
-    """Per anny vertex, how far the outermost garment over it stands off the skin (0 where none): what the
-    belt lies on. ``garments``: (garment, its placed vertices)."""
-    v = np.asarray(vertices, np.float64)
-    out = np.zeros(len(v))
-    for g, placed in garments:
-        mine = (g.i == g.j) & (g.copy_of < 0) & ~g.inner
-        np.maximum.at(out, g.i[mine], np.linalg.norm(placed[mine] - v[g.i[mine]], axis=1))
-    return out
+_REACH = 0.06     # the thickest cloth a strap is lifted onto (m): nothing farther above it is under it
 
 
-def lift_straps(state: dict, standoff_of: np.ndarray, vertices: np.ndarray) -> dict:
-    """The belt's straps (laid on the skin by ``belt.py``) lifted by the clothes under each point, so they
-    lie on the garment instead of inside it; their anchored ends stay."""
-    from scipy.spatial import cKDTree
-    tree = cKDTree(vertices)
+def lift_straps(state: dict, cloth: list[tuple[np.ndarray, np.ndarray]]) -> dict:
+    """The belt's straps (laid on the skin by ``belt.py``) lifted onto the clothes: each point of a strap
+    rises along its normal until its underside clears the topmost cloth under it (a ray cast down onto
+    every garment), and the strap stays taut over what lifts it (it spans an open jacket's front instead of
+    dipping into it); the anchored ends stay. ``cloth``: each garment's (vertices, triangles) as placed."""
+    import trimesh
+    from .belt import THICKNESS, WIDTH
+    offsets = np.cumsum([0] + [len(v) for v, _ in cloth])
+    mesh = trimesh.Trimesh(np.concatenate([v for v, _ in cloth]).astype(np.float64),
+                           np.concatenate([f + o for (_, f), o in zip(cloth, offsets)]), process=False)
     out = {}
     for strap in ("belt_diagonal", "belt_lap"):
         points, normals = state[strap].astype(np.float64), state[f"{strap}_normals"].astype(np.float64)
-        near, k = tree.query(points)
-        lift = np.where(near < 0.025, standoff_of[k], 0.0)
+        normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+        across = np.cross(np.gradient(points, axis=0), normals)
+        across /= np.maximum(np.linalg.norm(across, axis=1, keepdims=True), 1e-12)
+        lift = np.zeros(len(points))
+        for side in (-0.5, 0.0, 0.5):          # under the strap's middle and its two edges
+            under = points + across * side * WIDTH
+            hits, rays, _ = mesh.ray.intersects_location(under + normals * _REACH, -normals, multiple_hits=False)
+            height = ((hits - under[rays]) * normals[rays]).sum(axis=1) + THICKNESS / 2 + 0.001
+            np.maximum.at(lift, rays, height)
         lift[[0, -1]] = 0.0
+        for _ in range(30):     # taut: no point lower than the mean of its neighbours (a string over its supports)
+            lift[1:-1] = np.maximum(lift[1:-1], (lift[:-2] + lift[2:]) / 2)
         out[strap] = (points + normals * lift[:, None]).astype(np.float32)
         out[f"{strap}_normals"] = normals.astype(np.float32)
     return out

@@ -207,14 +207,16 @@ def _dressed(outfit: dict, topo: dict, state: dict) -> dict:
     v, faces = state["vertices"].astype(np.float64), topo["faces"]
     normals = hair.vertex_normals(v, faces)
     out, placed = {}, []
-    for slot in [*map(str, outfit["slots"]), "cap"]:
+    for slot in [*map(str, outfit["slots"]), "cap", "band"]:
         g = garments.Garment.from_arrays(outfit, slot)
         out[f"{slot}_co"], out[f"{slot}_crumple"] = garments.dress(g, v, faces, normals)
-        if slot != "cap":
-            placed.append((g, out[f"{slot}_co"]))
+        if slot not in ("cap", "band"):
+            # the belt lies on the cloth over the torso, pelvis and thighs only (as on the skin: belt.py)
+            carried = topo["carriers"][g.i][g.faces].all(axis=1) & ~g.band
+            placed.append((out[f"{slot}_co"], g.faces[carried]))
     out.update({f"{name}_co": co for name, co in accessories.place(outfit, v).items()})
     if "belt_diagonal" in state:
-        out.update(garments.lift_straps(state, garments.standoff(placed, v), v))
+        out.update(garments.lift_straps(state, placed))
     return out
 
 
