@@ -23,7 +23,6 @@ from .regions import _ARM, _along_upper_arm, _scale, bone_weights
 from .skeleton import Body, Posed
 
 TOPS = ("TSHIRT", "LONG_SLEEVE", "SHIRT", "HOODIE", "JACKET")
-SLOTS = ("top", "outer", "trousers")   # the outer layer is the jacket; under it, a T-shirt
 GAP = 0.0015          # the least a garment keeps off skin (m)
 RIM_DEPTH = 0.002     # an edge band turns this far into the body: no gap shows along it
 HEM_ROLL = 0.0025     # a hem, cuff or neckline is rolled: this much thicker over its last centimetre
@@ -241,7 +240,7 @@ def dress(garment: Garment, vertices: np.ndarray, faces: np.ndarray, normals: np
     lift = garment.lift + np.where(shell, (0.0015 + 0.006 * crumple) * billow, 0.0)
     out = skin + n * lift[:, None]
     out = _bridge(garment, out, n, shell)
-    out[shell] = _keep_off(v, faces, out[shell])
+    out[shell] = _keep_off(v, faces, normals, out[shell])
     copies = garment.copy_of >= 0
     out[copies] = out[garment.copy_of[copies]]
     return out.astype(np.float32), crumple.astype(np.float32)
@@ -316,15 +315,24 @@ def _bridge(g: Garment, out: np.ndarray, n: np.ndarray, shell: np.ndarray, round
     return out
 
 
-def _keep_off(v: np.ndarray, faces: np.ndarray, points: np.ndarray, rounds: int = 6) -> np.ndarray:
+def _keep_off(v: np.ndarray, faces: np.ndarray, normals: np.ndarray, points: np.ndarray, rounds: int = 6
+              ) -> np.ndarray:
     """Points moved out of the body to GAP above its surface (the closest point on its triangles, the side
-    from that triangle's normal): a sleeve's cloth against the torso, the belly's fold of a seated body."""
+    from that triangle's normal): a sleeve's cloth against the torso, the belly's fold of a seated body.
+    Only points within a few millimetres of the nearest skin vertex's tangent plane (or behind it) can be
+    that close, so only they are measured exactly."""
+    from scipy.spatial import cKDTree
+
     from .surface import Surface
+    _, k = cKDTree(v).query(points)
+    near = np.flatnonzero(((points - v[k]) * normals[k]).sum(axis=1) < GAP + 0.004)
+    if not len(near):
+        return points
     surface = Surface(v, faces)
     for _ in range(rounds):
-        q, n, d = surface.closest(points)
+        q, n, d = surface.closest(points[near])
         low = d < GAP
         if not low.any():
             break
-        points[low] = q[low] + n[low] * GAP
+        points[near[low]] = q[low] + n[low] * GAP
     return points
