@@ -240,7 +240,7 @@ def dress(garment: Garment, vertices: np.ndarray, faces: np.ndarray, normals: np
     lift = garment.lift + np.where(shell, (0.0015 + 0.006 * crumple) * billow, 0.0)
     out = skin + n * lift[:, None]
     out = _bridge(garment, out, n, shell)
-    out[shell] = _keep_off(v, faces, normals, out[shell])
+    out[shell] = _keep_off(v, faces, out[shell])
     copies = garment.copy_of >= 0
     out[copies] = out[garment.copy_of[copies]]
     return out.astype(np.float32), crumple.astype(np.float32)
@@ -315,24 +315,15 @@ def _bridge(g: Garment, out: np.ndarray, n: np.ndarray, shell: np.ndarray, round
     return out
 
 
-def _keep_off(v: np.ndarray, faces: np.ndarray, normals: np.ndarray, points: np.ndarray, rounds: int = 6
-              ) -> np.ndarray:
+def _keep_off(v: np.ndarray, faces: np.ndarray, points: np.ndarray, rounds: int = 6) -> np.ndarray:
     """Points moved out of the body to GAP above its surface (the closest point on its triangles, the side
-    from that triangle's normal): a sleeve's cloth against the torso, the belly's fold of a seated body.
-    Only points within a few millimetres of the nearest skin vertex's tangent plane (or behind it) can be
-    that close, so only they are measured exactly."""
-    from scipy.spatial import cKDTree
-
+    from that triangle's normal): a sleeve's cloth against the torso, the belly's fold of a seated body."""
     from .surface import Surface
-    _, k = cKDTree(v).query(points)
-    near = np.flatnonzero(((points - v[k]) * normals[k]).sum(axis=1) < GAP + 0.004)
-    if not len(near):
-        return points
     surface = Surface(v, faces)
     for _ in range(rounds):
-        q, n, d = surface.closest(points[near])
+        q, n, d = surface.closest(points)
         low = d < GAP
         if not low.any():
             break
-        points[near[low]] = q[low] + n[low] * GAP
+        points[low] = q[low] + n[low] * GAP
     return points
