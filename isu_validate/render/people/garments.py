@@ -320,10 +320,12 @@ def _keep_off(v: np.ndarray, faces: np.ndarray, points: np.ndarray, rounds: int 
     from that triangle's normal): a sleeve's cloth against the torso, the belly's fold of a seated body."""
     from .surface import Surface
     surface = Surface(v, faces)
+    moved = np.arange(len(points))        # a point left where it was stays clear: only moved ones are re-measured
     for _ in range(rounds):
-        q, n, d = surface.closest(points)
+        q, n, d = surface.closest(points[moved])
         low = d < GAP
         if not low.any():
             break
-        points[low] = q[low] + n[low] * GAP
+        moved = moved[low]
+        points[moved] = q[low] + n[low] * GAP
     return points
