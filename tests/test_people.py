@@ -163,12 +163,13 @@ def test_children_sit_in_their_seats_the_rear_facing_one_reclined(people):
 def test_the_cache_is_keyed_reused_and_needs_no_anny_on_a_hit(people, monkeypatch, tmp_path):
     key = ("FEMALE", "H1", "W1", "HAPPY", "NONE")
     first = people.driver_state(*key)
+    scene = dict(zip(("driver_gender", "driver_height", "driver_weight", "driver_emotion", "phone_position"), key))
+    dressed = people.for_scene({**scene, "child_seat": "NO"})      # the outfit cut, the driver dressed
     misses = people.misses
     monkeypatch.setattr(people_module, "load_model", lambda: pytest.fail("anny loaded on a cache hit"))
     assert people.driver_state(*key) == first and people.misses == misses
-    scene = dict(zip(("driver_gender", "driver_height", "driver_weight", "driver_emotion", "phone_position"), key))
     spec = people.for_scene({**scene, "child_seat": "NO"})
-    assert spec["driver"]["state"] == str(first) and spec["child"] is None
+    assert spec == dressed and spec["driver"]["state"] == str(first) and spec["child"] is None
     # another cabin (the seat moved) is another entry; nothing half-written is left behind
     cabin = load_cabin("default")
     cabin["seats"]["driver"]["cushion"][0] += 0.05

@@ -53,7 +53,11 @@ DEFAULTS = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height
             # the people's looks: not features of the paper's space (isu-paper renders these); isu-diverse varies them
             "driver_skin_tone": "MEDIUM", "driver_hair_colour": "BROWN", "driver_hair_style": "BY_GENDER",
             # the world outside and the car's style: likewise (rigs/cabins/default.toml [lighting.surroundings])
-            "surroundings": "TOWN", "sun_direction": "FRONT", "cabin_trim": "GREY", "seat_material": "FABRIC"}
+            "surroundings": "TOWN", "sun_direction": "FRONT", "cabin_trim": "GREY", "seat_material": "FABRIC",
+            # what the driver wears beyond the T-shirt's colour (isu-diverse varies it; isu-paper: a plain T-shirt)
+            "driver_top": "TSHIRT", "driver_top_print": "PLAIN", "driver_print_colour": "NAVY",
+            "driver_jacket_colour": "BLACK", "driver_trousers_colour": "NAVY", "driver_eyewear": "NONE",
+            "driver_cap": "NO", "driver_watch": "NO"}
 
 
 class BlenderRenderer:

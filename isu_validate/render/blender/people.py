@@ -13,6 +13,7 @@ from mathutils import Vector
 
 from ..labels import INSTANCE_ID
 from . import mesh as M
+from .clothes import Outfit
 from .people_look import Look
 
 BELT = (0.10, 0.10, 0.11)
@@ -103,34 +104,18 @@ class Person:
         self.look.set(skin, hair, shirt)
 
 
-def _mesh(name: str, n_vertices: int, triangles: np.ndarray, slots: np.ndarray, materials, uv_layers: dict | None):
-    mesh = bpy.data.meshes.new(name)
-    mesh.vertices.add(n_vertices)
-    mesh.loops.add(len(triangles) * 3)
-    mesh.polygons.add(len(triangles))
-    mesh.loops.foreach_set("vertex_index", np.ascontiguousarray(triangles, np.int32).ravel())
-    mesh.polygons.foreach_set("loop_start", np.arange(0, len(triangles) * 3, 3, dtype=np.int32))
-    mesh.polygons.foreach_set("loop_total", np.full(len(triangles), 3, np.int32))
-    mesh.polygons.foreach_set("use_smooth", np.ones(len(triangles), bool))
-    for mat in materials:
-        mesh.materials.append(mat)
-    mesh.polygons.foreach_set("material_index", np.ascontiguousarray(slots, np.int32))
-    for layer_name, corners in (uv_layers or {}).items():
-        layer = mesh.uv_layers.new(name=layer_name)
-        layer.data.foreach_set("uv", np.ascontiguousarray(corners, np.float32).ravel())
-    mesh.update(calc_edges=True)
-    mesh.validate(clean_customdata=False)
-    return mesh
+_mesh = M.arrays_mesh    # a mesh from arrays (one home: mesh.py)
 
 
 class Driver:
-    """The driver: an anny body in a T-shirt, the seat belt over it when worn, the phone in hand, and
+    """The driver: an anny body in clothes (``clothes.py``), the seat belt over them when worn, the phone in hand, and
     the driver's seat slid on its track to fit (with the belt buckle mounted on it)."""
 
     def __init__(self, rig: dict, coll, seat_parts: list):
         # one persistent person per topology (the genders differ in topology), so a change of
         # driver between frames swaps vertices instead of rebuilding meshes
         self.coll, self.persons, self.person = coll, {}, None
+        self.outfits: dict[str, Outfit] = {}     # per topology, like the persons
         self.belt = _Belt(rig["seat_belt"], coll)
         self.phone_hand = None
         self.seat = [(obj, obj.location.x) for obj in seat_parts]
@@ -150,7 +135,14 @@ class Driver:
         data = self.person.set(spec["topology"], spec["state"])
         self.slide_seat(float(data["seat_shift"]))
         self.person.set_look(f["driver_skin_tone"], f["driver_hair_colour"], f["tshirt_colour"])
-        self.belt.apply(data, f["seat_belt"] == "YES")
+        if spec["topology"] not in self.outfits:
+            self.outfits[spec["topology"]] = Outfit(f"{self.person.name}_outfit", self.coll,
+                                                    INSTANCE_ID["driver"], INSTANCE_ID["driver_face"])
+        for topology, outfit in self.outfits.items():
+            if topology != spec["topology"]:
+                outfit.hide()
+        dressed = self.outfits[spec["topology"]].apply(spec["outfit"], spec["dressed"], f)
+        self.belt.apply(dressed, f["seat_belt"] == "YES")   # the straps lie on the clothes
         self.phone_hand = None
         if "phone_centre" in data:   # the phone lies in the posed palm, turned as the rig's position says
             self.phone_hand = (Vector(data["phone_centre"].tolist()), f["phone_position"])
@@ -158,6 +150,8 @@ class Driver:
     def hide(self) -> None:
         for person in self.persons.values():
             person.show(False)
+        for outfit in self.outfits.values():
+            outfit.hide()
         self.belt.hide()
         self.slide_seat(0.0)
         self.phone_hand = None
