@@ -64,8 +64,11 @@ def held_out_records(model_dir: Path, space: SceneSpace, features: list[str]) ->
     held_out = load_feature_set(path)
     heads = {h.feature: h for h in load_heads(model_dir)[0]}
     if held_out.meta.get("space_hash") != space.hash:
-        raise InputError(f"the held-out features in {model_dir} belong to space {held_out.meta.get('space')!r}, not "
-                         f"{space.name!r}: pass --space {held_out.meta.get('space')}")
+        trained_in = held_out.meta.get("space")
+        fix = (f"the space file changed since (hash {held_out.meta.get('space_hash')} then, {space.hash} now): retrain "
+               "the model" if trained_in == space.name else f"pass --space {trained_in}")
+        raise InputError(f"the held-out features in {model_dir} belong to space {trained_in!r}, not {space.name!r} "
+                         f"as it is: {fix}")
     records = []
     for feature in [f for f in features if f in heads]:
         head = heads[feature]
