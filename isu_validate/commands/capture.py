@@ -146,9 +146,10 @@ def run_import(args) -> int:
         where = result.out / folder
         sidecars = [json.loads(f.with_suffix(".json").read_text()) for f in frames]
         times = ", ".join(f"{s['exposure_us'] / 1e6:g}" for s in sidecars)
+        isos = ", ".join(sorted({format(s["iso"], "g") for s in sidecars}))
         modes = {"auto" if s["auto_exposure"] else "manual" for s in sidecars}
         print(f"{where}: {len(frames)} frame(s) from {sidecars[0]['device']}, exposure {times} s, ISO "
-              f"{', '.join(sorted({f'{s['iso']:g}' for s in sidecars}))}, {'/'.join(sorted(modes))}"
+              f"{isos}, {'/'.join(sorted(modes))}"
               + (f"; nominal camera file {result.cameras[folder]}" if folder in result.cameras else ""))
     for note in result.notes:
         print(f"note: {note}", file=sys.stderr)

@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..errors import InputError
+from .strength import strength
 
 # beyond these a "jitter" is another camera (the default rig hangs 7 cm under the roof and frames the tallest
 # driver's head a few pixels from the top edge); frames a draw leaves unusable are skipped as any other
@@ -56,11 +57,6 @@ def parse_camera_jitter(text: str | None) -> CameraJitter:
         if not sep or key not in LIMITS:
             raise InputError(f"--camera-jitter {text!r}: {part.strip()!r} is not KEY=VALUE with KEY one of "
                              f"{', '.join(LIMITS)} (e.g. --camera-jitter {EXAMPLE})")
-        try:
-            values[key] = float(value)
-        except ValueError:
-            raise InputError(f"--camera-jitter {text!r}: {key}={value!r} is not a number") from None
-        if not 0.0 <= values[key] <= LIMITS[key]:
-            raise InputError(f"--camera-jitter {text!r}: {key} must be between 0 and {LIMITS[key]:g} "
-                             f"({'metres' if key == 'pos' else 'degrees' if key == 'angle' else 'relative'})")
+        unit = "metres" if key == "pos" else "degrees" if key == "angle" else "relative"
+        values[key] = strength("--camera-jitter", text, key, value, LIMITS[key], unit)
     return CameraJitter(**values)

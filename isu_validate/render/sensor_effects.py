@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass, fields
 
 from ..errors import InputError
+from .strength import strength
 
 # what each maximum means (the units a user writes)
 MEANING = {"exposure": "stops either way", "white_balance": "relative gain of red and blue, either way",
@@ -132,11 +133,5 @@ def parse_sensor_effects(text: str | None) -> SensorEffects:
         if key not in LIMITS:
             raise InputError(f"--sensor-effects {text!r}: unknown effect {key!r}; effects: "
                              + ", ".join(f"{k} ({MEANING[k]})" for k in LIMITS))
-        try:
-            values[key] = float(value)
-        except ValueError:
-            raise InputError(f"--sensor-effects {text!r}: {key}={value!r} is not a number") from None
-        if not 0.0 <= values[key] <= LIMITS[key]:
-            raise InputError(f"--sensor-effects {text!r}: {key} must be between 0 and {LIMITS[key]:g} "
-                             f"({MEANING[key]})")
+        values[key] = strength("--sensor-effects", text, key, value, LIMITS[key], MEANING[key])
     return SensorEffects(**values)
