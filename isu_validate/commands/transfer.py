@@ -40,6 +40,9 @@ def register(sub) -> None:
     p.add_argument("--repeats", type=int, default=1, help="SUT queries per photo, per-feature majority (default 1)")
     p.add_argument("--prompt-style", choices=("paper", "compact"), help="VQA prompt wording (default paper)")
     p.add_argument("--sut-timeout", type=float, default=60.0, help="seconds per SUT request (default 60)")
+    p.add_argument("--threads", type=int, default=1,
+                   help="torch CPU threads of the reference ISU (default 1: it reads one photo at a time, and on a "
+                        "busy 2-core machine two threads spun against each other: 5-13 s a photo against 0.5-1 s)")
     p.add_argument("--out", type=Path, required=True,
                    help="folder for the report (new, or this same measurement's: it goes on where it stopped)")
     add_overwrite_option(p, "another command's output, or a transfer measurement of other sets or settings")
@@ -62,6 +65,9 @@ def run(args) -> int:
                                 args.device, args.sut_timeout)
     args.interrupted = (f"interrupted; the replies so far are cached in {args.out / 'cache' / 'sut'}: run the same "
                         "command again to continue")
+    if args.sut == "reference":   # the embedded SUT runs torch here; any other SUT runs elsewhere
+        import torch
+        torch.set_num_threads(max(1, args.threads))
     summary = measure_transfer(settings, args.out, overwrite=args.overwrite)
     print(format_summary(summary))
     print(f"report: {args.out / 'report.html'}", file=sys.stderr)
