@@ -157,7 +157,7 @@ def test_sut_error_is_not_a_failure(space):
 # ---------------------------------------------------------------- reference caption
 def test_reference_caption_follows_the_papers_template_with_only_active_features(space):
     text = reference_caption(space, SCENE)
-    assert text == ("The image is taken from inside a car parked in a courtyard in daylight. A happy female driver "
+    assert text == ("The image is taken from inside a car parked outside in daylight. A happy female driver "
                     "wearing a white T-shirt is seated in the car. The driver is wearing a safety belt. An "
                     "anthracite suitcase is visible on the rear seat. An empty rear-facing baby seat is positioned "
                     "on the front passenger seat.")
@@ -165,7 +165,7 @@ def test_reference_caption_follows_the_papers_template_with_only_active_features
                 car_lights="ON", external_light="LOW")
     text = reference_caption(space, bare)  # latent luggage colour and child-seat values are still in the dict
     assert "suitcase" not in text and "anthracite" not in text and "baby" not in text
-    assert "parked in a courtyard at night with the interior lights on." in text
+    assert "parked outside at night with the interior lights on." in text
     assert text.endswith("The driver is holding a phone in the hand. "
                          "A cola can is visible on the front passenger seat.")
 

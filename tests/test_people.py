@@ -163,12 +163,13 @@ def test_children_sit_in_their_seats_the_rear_facing_one_reclined(people):
 def test_the_cache_is_keyed_reused_and_needs_no_anny_on_a_hit(people, monkeypatch, tmp_path):
     key = ("FEMALE", "H1", "W1", "HAPPY", "NONE")
     first = people.driver_state(*key)
+    scene = dict(zip(("driver_gender", "driver_height", "driver_weight", "driver_emotion", "phone_position"), key))
+    dressed = people.for_scene({**scene, "child_seat": "NO"})      # the outfit cut, the driver dressed
     misses = people.misses
     monkeypatch.setattr(people_module, "load_model", lambda: pytest.fail("anny loaded on a cache hit"))
     assert people.driver_state(*key) == first and people.misses == misses
-    scene = dict(zip(("driver_gender", "driver_height", "driver_weight", "driver_emotion", "phone_position"), key))
     spec = people.for_scene({**scene, "child_seat": "NO"})
-    assert spec["driver"]["state"] == str(first) and spec["child"] is None
+    assert spec == dressed and spec["driver"]["state"] == str(first) and spec["child"] is None
     # another cabin (the seat moved) is another entry; nothing half-written is left behind
     cabin = load_cabin("default")
     cabin["seats"]["driver"]["cushion"][0] += 0.05
@@ -273,3 +274,44 @@ def test_creases_mark_skin_an_expression_gathers_and_nothing_else():
     rest_dup = rest.copy()
     rest_dup[1] = rest_dup[0]                                     # two vertices on one point at rest
     assert np.isfinite(crease_field(faces, rest_dup, squeezed, everywhere)).all()
+
+
+def test_the_bob_has_its_locks_behind_the_forehead_and_short_hair_stays_the_shell(people, model):
+    """87 tapered cards over the bob, rooted on its shell and lying along it, none over the forehead (no
+    fringe: the planners' decision on issue 32) nor below the bob's edge; short hair and the buzz cut have none."""
+    from isu_validate.render.people import hair
+
+    for style in ("short", "buzz"):
+        topology = _load(people.topology("male", style))
+        assert len(topology["lock_face"]) == 0 and len(topology["lock_faces"]) == 0, style
+    topology = _load(people.topology("female"))
+    state = _load(people.driver_state("FEMALE", "H3", "W2", "HAPPY", "NONE"))
+    n = len(topology["lock_face"])
+    assert n == hair.LOCKS["bob"] == 87 and state["locks"].shape == (n * 2 * hair.LOCK_POINTS, 3)
+    assert topology["lock_faces"].max() == len(state["locks"]) - 1 and np.isfinite(state["locks"]).all()
+    rest = people_module.Body(model, people_module.driver_phenotype("FEMALE", "H3", "W2")).evaluate({})
+    style = hair.HairStyle("bob", topology["hair_i"], topology["hair_j"], topology["hair_t"], topology["hair_faces"],
+                           topology["hair_thickness"], topology["field_scalp"])
+    v = rest.vertices.astype(np.float64)
+    shell = hair.hair_vertices(style, v, hair.vertex_normals(v, topology["faces"])).astype(np.float64)
+    locks = hair.Locks(topology["lock_face"], topology["lock_bary"], topology["lock_length"], topology["lock_width"],
+                       topology["lock_lift"], int(topology["lock_crown"]))
+    cards = hair.lock_vertices(locks, topology["hair_faces"], shell).astype(np.float64)
+    nearest = np.min(np.linalg.norm(cards[:, None] - shell[None], axis=2), axis=1)
+    assert np.median(nearest) < 0.01                                     # they lie on the bob, not off it
+    across = np.linalg.norm(cards[0::2] - cards[1::2], axis=1).reshape(n, hair.LOCK_POINTS)
+    assert np.allclose(across[:, -1] / across[:, 0], hair.TIP_SHARE, atol=0.01)   # tapered to the tip
+    head = hair.head_frame(rest)
+    bearing = head.bearing(cards)
+    knots = np.array(hair._HAIRLINES["bob"])
+    hairline = head.eyes[2] + head.size * np.interp(bearing, knots[:, 0], knots[:, 1])
+    z = cards[:, 2]
+    forehead = (bearing > 0.45) & (z > head.eyes[2] - 0.01) & (z < hairline)   # between the brows and the hairline
+    face = (bearing > 0.7) & (z < hairline)
+    assert not forehead.any() and not face.any(), f"{forehead.sum()} over the forehead, {face.sum()} over the face"
+    # none hangs below the bob: wherever a lock is, the shell (within 6 cm across) reaches at least as low
+    across_m = np.linalg.norm(cards[:, None, :2] - shell[None, :, :2], axis=2)
+    lowest = np.where(across_m < 0.06, shell[None, :, 2], np.inf).min(axis=1)
+    assert (lowest <= z + 0.005).all(), f"{(lowest > z + 0.005).sum()} lock vertices below the bob"
+    roots = cards.reshape(n, hair.LOCK_POINTS, 2, 3)[:, 0].mean(axis=1)
+    assert (head.bearing(roots) <= hair.FACE_SIDE + 0.05).all()         # rooted behind the face's side

@@ -364,6 +364,7 @@ def test_bench_render_reports_speed_and_error_per_preset(tmp_path, capsys):
     assert row["psnr_db"] == pytest.approx(peak_signal_noise_ratio(reference, draft, data_range=255))
     assert row["ssim"] == pytest.approx(structural_similarity(reference, draft, channel_axis=2, data_range=255))
     assert 10 < row["psnr_db"] < 60 and row["ssim"] < 1.0  # a real difference, not a frame against itself
+    assert row["ssim_per_scene"] == [pytest.approx(row["ssim"], abs=1e-5)] and row["ssim_floor"] is None  # draft: none
     # the SUT answers option (mean brightness mod number of options): unchanged where both frames agree
     space = load_space()
     scene = space.sample(np.random.default_rng(json.loads((tmp_path / "bench.json").read_text())["seed"]), 1)[0]

@@ -183,8 +183,11 @@ def test_a_scene_file_holding_a_list_is_a_clear_error_not_a_traceback(tmp_path, 
 def test_a_space_extends_another_adding_features_and_keeping_its_constraints(tmp_path):
     diverse = load_space("isu-diverse")
     assert diverse.names[:len(SPACE.names)] == SPACE.names
-    assert set(diverse.names) - set(SPACE.names) == {"driver_skin_tone", "driver_hair_colour", "driver_hair_style"}
-    looks = ("driver_skin_tone", "driver_hair_colour", "driver_hair_style")
+    looks = ("driver_skin_tone", "driver_hair_colour", "driver_hair_style", "driver_top", "driver_top_print",
+             "driver_print_colour", "driver_jacket_colour", "driver_trousers_colour", "driver_eyewear", "driver_cap",
+             "driver_watch")
+    assert set(diverse.names) - set(SPACE.names) == set(looks) | {"surroundings", "sun_direction", "cabin_trim",
+                                                                  "seat_material"}
     assert not any(diverse.features[n].predicted for n in looks)
     assert len(diverse.constraints) == len(SPACE.constraints)
     assert {f.name: f.weight for f in diverse.predicted} == {f.name: f.weight for f in SPACE.predicted}

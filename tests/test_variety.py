@@ -282,3 +282,30 @@ def test_the_model_card_records_the_variety_its_sets_were_rendered_with(tmp_path
     assert train.meta["variety"] == variety.describe()
     painted = cv2.imread(str(tmp_path / "work" / "train" / "00000.png"))
     assert len(np.unique(painted)) > 3   # the painter's three levels, developed by the effects
+
+
+def test_reference_train_passes_its_variety_to_the_renderer_and_the_card(tmp_path, monkeypatch, capsys):
+    """The command with the rendering and training replaced by recorders; a bad spec is one line, nothing run."""
+    from isu_validate import render
+    from isu_validate.reference import training
+
+    seen = []
+
+    def record(space, renderer, out, workdir, n, held_out, seed, preset, **extra):
+        seen.append((renderer, extra))
+        return {"held_out": {"per_feature": {}}}
+
+    monkeypatch.setattr(render, "open_renderer", lambda **kw: _Painter())
+    monkeypatch.setattr(training, "train_reference", record)
+    args = ["reference", "train", "--n", "10", "--held-out", "1", "--seed", "4", "--workdir", str(tmp_path / "w")]
+    assert main([*args, "--sensor-effects", "mild,noise=0.02"]) == 0
+    renderer, extra = seen[-1]
+    assert isinstance(renderer, VariedRenderer) and renderer.variety.effects.noise == 0.02
+    assert extra["variety"] == Variety.parse(None, "mild,noise=0.02", 4).describe()
+    assert main([*args, "--out", str(tmp_path / "plain")]) == 0
+    assert isinstance(seen[-1][0], _Painter) and not seen[-1][1]["variety"]      # off: the renderer itself
+    capsys.readouterr()
+    assert main([*args, "--out", str(tmp_path / "bad"), "--camera-jitter", "focal=2"]) == 2
+    err = capsys.readouterr().err
+    assert "focal must be between 0 and 0.3" in err and len(err.strip().splitlines()) == 1 and len(seen) == 2
+

@@ -24,8 +24,8 @@ from .base import DeviceNotFound, ExposureRequest, Frame, FrameSource
 
 DEFAULT_RIG = "standin"
 PRESET = "draft"
-ENVIRONMENT = "sunset"        # the default cabin's sky is "courtyard": a different light on everything
-LIGHT_SCALE = 0.7             # window and sky light relative to the cabin rig
+ENVIRONMENT = "sunset"        # one sky for every scene (the default cabin changes it with the light): other light
+LIGHT_SCALE = 0.7             # window, sky and sun light relative to the cabin rig
 GAIN = 0.9                    # a slightly darker exposure than the render
 NOISE_SIGMA = 5.0             # sensor noise, 8-bit levels
 
@@ -40,8 +40,9 @@ def standin_cabin(cabin: dict) -> dict:
     cabin = copy.deepcopy(cabin)
     light = cabin["lighting"]
     light["environment"] = ENVIRONMENT
-    for key in ("environment_strength", "window_light_w"):
-        light[key] = {level: value * LIGHT_SCALE for level, value in light[key].items()}
+    for key in ("environment_strength", "window_light_w", "sun_strength"):
+        if key in light:
+            light[key] = {level: value * LIGHT_SCALE for level, value in light[key].items()}
     return cabin
 
 

@@ -97,6 +97,7 @@ def _bench_preset(preset, scenes, refs, args, space, people: bool = True) -> dic
     from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
     from isu_validate.render import open_renderer
+    from isu_validate.render.presets import SSIM_FLOORS
     times, psnr, ssim = [], [], []
     parts = {"people_s": [], "update_s": [], "render_s": [], "write_s": [], "worker_cpu_s": [], "footprint_s": []}
     with open_renderer(preset, args.rig, log_dir=args.out / "logs", device=args.render_device) as r:
@@ -123,6 +124,7 @@ def _bench_preset(preset, scenes, refs, args, space, people: bool = True) -> dic
             "s_per_frame": {"median": statistics.median(times), "min": min(times), "max": max(times)},
             "median_parts_s": {k: statistics.median(v) for k, v in parts.items()},
             "psnr_db": float(np.mean(psnr)) if psnr else None, "ssim": float(np.mean(ssim)) if ssim else None,
+            "ssim_per_scene": [round(float(v), 5) for v in ssim], "ssim_floor": SSIM_FLOORS.get(preset.name),
             "frames": len(times)}
 
 
@@ -148,11 +150,18 @@ class _SUTCheck:
         return same / total if total else None
 
 
+def _floor(row: dict) -> str:
+    floor = row.get("ssim_floor")
+    if floor is None or row.get("ssim") is None:
+        return ""
+    return f" (floor {floor})" if row["ssim"] >= floor else f" (BELOW the floor {floor})"
+
+
 def _print_row(row: dict) -> None:
     s = row["s_per_frame"]
     print(f"{row['preset']:>9} {row['resolution']:>8} {row['samples']:>4} spp {row['render_device']:>5}  "
           f"s/frame median {s['median']:.2f} (min {s['min']:.2f}, max {s['max']:.2f})  "
-          f"PSNR {row['psnr_db']:.1f} dB  SSIM {row['ssim']:.4f}  "
+          f"PSNR {row['psnr_db']:.1f} dB  SSIM {row['ssim']:.4f}{_floor(row)}  "
           + (f"SUT unchanged {row['sut_unchanged']:.1%}  " if row.get("sut_unchanged") is not None else "") +
           f"[update {row['median_parts_s']['update_s']:.3f} render {row['median_parts_s']['render_s']:.2f} "
           f"write {row['median_parts_s']['write_s']:.2f}; worker CPU {row['median_parts_s']['worker_cpu_s']:.2f} s; "

@@ -29,6 +29,7 @@ def cmd_warm(args) -> int:
     people = _people(args)
     counts = warm(people, args.limit)
     print(f"people cache {people.store.root}: {counts['drivers']} drivers and {counts['children']} children, "
+          f"{counts['outfits']} outfits, "
           f"{counts['posed']} entries posed now (the rest were cached)")
     return 0
 

@@ -188,8 +188,8 @@ def card_markdown(info: dict) -> str:
 def _variety(variety: dict | None) -> list[str]:
     """The camera jitter and sensor effects, with their seed; none: the camera file's frames, untouched."""
     if not variety:
-        return ["## Camera and sensor", "", "Every render is the camera file's frame, untouched (no camera jitter, "
-                "no sensor effects).", ""]
+        return ["## Camera and sensor", "", "Every render is seen through the camera file's pose and lens as they are "
+                "(no camera jitter, no sensor effects).", ""]
     return ["## Camera and sensor (variety per scene)", "",
             f"- camera jitter: `{variety['camera_jitter'] or 'none'}` (uniform per axis: shift in metres along the "
             "cabin's axes, turn in degrees about the camera's own, focal length relative); the labels (boxes, masks, "

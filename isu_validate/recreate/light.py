@@ -37,24 +37,28 @@ def light_rows(space: SceneSpace, scene: Mapping[str, Any], cabin: dict) -> list
         if kind not in RENDERED:
             continue
         for value in feature.values:
-            rendered, relative = RENDERED[kind](cabin, str(value), rule)
+            rendered, relative = RENDERED[kind](cabin, str(value), rule, canonical)
             rows.append(LightRow(name, feature.display_name, str(value), rendered, relative,
                                  str((rule.get("practical") or {}).get(str(value), "")),
                                  canonical.get(name) == value))
     return rows
 
 
-def _exterior(cabin: dict, value: str, rule: Mapping) -> tuple[str, str]:
+def _exterior(cabin: dict, value: str, rule: Mapping, scene: Mapping[str, Any]) -> tuple[str, str]:
+    from ..render.cabin import environment_for
+    from ..render.renderer import DEFAULTS
     light = cabin["lighting"]
     window = float(light["window_light_w"][value])
     brightest = max(float(v) for v in light["window_light_w"].values())
     share = window / brightest
     relative = "1" if share == 1 else f"{share:.2g} ({math.log2(share):+.1f} stops)"
-    return (f"{light['environment']} sky x{float(light['environment_strength'][value]):g}, "
-            f"window light {window:g} W/m²", relative)
+    sky = environment_for(light, scene.get("surroundings", DEFAULTS["surroundings"]), value)
+    sun = float(light.get("sun_strength", {}).get(value, 0.0))
+    return (f"{sky} sky x{float(light['environment_strength'][value]):g}, "
+            f"window light {window:g} W/m²{f', sun {sun:g} W/m²' if sun else ''}", relative)
 
 
-def _lamps(cabin: dict, value: str, rule: Mapping) -> tuple[str, str]:
+def _lamps(cabin: dict, value: str, rule: Mapping, scene: Mapping[str, Any]) -> tuple[str, str]:
     if value != "ON":   # the renderer lights the lamps for ON (render/blender/lighting.py)
         return "no lamp", ""
     anchors = cabin.get("anchors", {})

@@ -21,7 +21,10 @@ _REQUIRED = {"shell": ("x_rear", "x_front", "half_width", "roof", "belt_line", "
              "seat_belt": ("upper_anchor", "buckle", "lap_anchor"),
              "anchors": ("child_seat", "luggage_PASSENGER", "luggage_BACK", "interior_light", "rear_light"),
              "codriver_seat": CODRIVER_SEAT_OBJECTS,
-             "lighting": ("environment", "environment_strength", "window_light_w", "interior_light_w")}
+             "lighting": ("environment_strength", "window_light_w", "interior_light_w")}
+# the CC0 world HDRIs (Poly Haven, 1K) in the bpy wheel: bpy/<version>/datafiles/studiolights/world/<name>.exr
+STUDIO_LIGHTS = ("city", "courtyard", "forest", "interior", "night", "studio", "sunrise", "sunset")
+LIGHT_LEVELS = ("LOW", "MEDIUM", "HIGH")
 
 
 class CabinRigError(UserError, ValueError):
@@ -41,6 +44,25 @@ def load_cabin(name_or_path: str | os.PathLike = "default") -> dict:
     return raw
 
 
+def environment_for(lighting: dict, surroundings: str, external_light: str) -> str:
+    """The studio light seen through the windows: the rig's `environment` when it names one sky for every
+    scene, else its `surroundings` table's entry for the scene's surroundings and external light."""
+    if "environment" in lighting:
+        return lighting["environment"]
+    table = lighting["surroundings"]
+    if surroundings not in table:
+        raise CabinRigError(f"the cabin rig's [lighting.surroundings] has no {surroundings!r}; it has "
+                            f"{', '.join(table)} (see rigs/cabins/default.toml)")
+    return table[surroundings][external_light]
+
+
+def environments(lighting: dict) -> list[str]:
+    """Every studio light the rig can show, sorted."""
+    if "environment" in lighting:
+        return [lighting["environment"]]
+    return sorted({name for table in lighting["surroundings"].values() for name in table.values()})
+
+
 def cabin_hash(cabin: dict) -> str:
     """Identifies the cabin's content (asset files by their bytes): part of the render cache key."""
     # `recreate` holds words and measurements for recreation sheets: it never changes a render
@@ -58,6 +80,7 @@ def _check(raw: dict, where: str) -> None:
         missing = [k for k in keys if k not in raw[table]]
         if missing:
             raise CabinRigError(f"{where}: [{table}] lacks {', '.join(missing)} (see rigs/cabins/default.toml)")
+    _check_lighting(raw["lighting"], where)
     seats = raw.get("seats", {})
     for seat in ("driver", "passenger", "rear"):
         if seat not in seats:
@@ -79,6 +102,29 @@ def _check(raw: dict, where: str) -> None:
         if "fingers" in spec and not _triple(spec["fingers"]):
             raise CabinRigError(f"{where}: [phone_positions.{name}] fingers must be a direction [x, y, z] "
                                 f"(where the fingers point; leave it out for away from the shoulder)")
+
+
+def _check_lighting(light: dict, where: str) -> None:
+    """The skies: one `environment` or a `surroundings` table of studio lights per external light."""
+    fix = f"(studio lights: {', '.join(STUDIO_LIGHTS)}; see rigs/cabins/default.toml)"
+    if "environment" in light:
+        if light["environment"] not in STUDIO_LIGHTS:
+            raise CabinRigError(f"{where}: [lighting] environment {light['environment']!r} is not a studio light {fix}")
+    else:
+        table = light.get("surroundings")
+        if not isinstance(table, dict) or not table:
+            raise CabinRigError(f"{where}: [lighting] needs `environment` (one sky) or [lighting.surroundings] "
+                                f"tables (a sky per external light for each surroundings value) {fix}")
+        for name, skies in table.items():
+            if not isinstance(skies, dict) or set(skies) != set(LIGHT_LEVELS) or \
+                    any(sky not in STUDIO_LIGHTS for sky in skies.values()):
+                raise CabinRigError(f"{where}: [lighting.surroundings] {name} must map LOW, MEDIUM and HIGH to "
+                                    f"studio lights {fix}")
+    sun = light.get("sun_strength", {})
+    if not isinstance(sun, dict) or any(k not in LIGHT_LEVELS or not isinstance(v, (int, float)) or v < 0
+                                        for k, v in sun.items()):
+        raise CabinRigError(f"{where}: [lighting] sun_strength must map external light levels (LOW, MEDIUM, HIGH) "
+                            f"to the sun's strength in W/m² (0 or absent: no sun)")
 
 
 def _triple(value) -> bool:

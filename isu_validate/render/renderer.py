@@ -38,8 +38,10 @@ from .worker import BlenderWorker, WorkerCrashed, WorkerFailed, WorkerTimeout
 # 2: driver_face part, footprints; 3: the phone, can and bottle lie on the co-driver seat; 4: anny people;
 # 5: the camera frames tall drivers' heads, P8 by the door in view, light tree off; 6: people and things
 # that read as real (issues 32, 33); 7: the phone gripped at P1-P10, upright at the ears, portrait when read;
-# 8: short hair fuller on top with sideburns, brows darker than the hair, GREY hair darker
-RENDERER_VERSION = "isu-blender-8"
+# 8: short hair fuller on top with sideburns, brows darker than the hair, GREY hair darker; 9 (issues 32, 44): locks
+# over the bob, a world outside the windows (HDRI by light and surroundings, the sun in HIGH light), a furnished
+# cabin in car styles, garments and accessories
+RENDERER_VERSION = "isu-blender-9"
 
 # what the worker shows for a feature the scene space does not have (or that is inactive)
 DEFAULTS = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height": "H2", "driver_weight": "W2",
@@ -49,7 +51,13 @@ DEFAULTS = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height
             "luggage_position": "BACK", "luggage_colour": "YELLOW", "phone_codriver_seat": "NO",
             "colacan_codriver_seat": "NO", "colabottle_codriver_seat": "NO",
             # the people's looks: not features of the paper's space (isu-paper renders these); isu-diverse varies them
-            "driver_skin_tone": "MEDIUM", "driver_hair_colour": "BROWN", "driver_hair_style": "BY_GENDER"}
+            "driver_skin_tone": "MEDIUM", "driver_hair_colour": "BROWN", "driver_hair_style": "BY_GENDER",
+            # the world outside and the car's style: likewise (rigs/cabins/default.toml [lighting.surroundings])
+            "surroundings": "TOWN", "sun_direction": "FRONT", "cabin_trim": "GREY", "seat_material": "FABRIC",
+            # what the driver wears beyond the T-shirt's colour (isu-diverse varies it; isu-paper: a plain T-shirt)
+            "driver_top": "TSHIRT", "driver_top_print": "PLAIN", "driver_print_colour": "NAVY",
+            "driver_jacket_colour": "BLACK", "driver_trousers_colour": "NAVY", "driver_eyewear": "NONE",
+            "driver_cap": "NO", "driver_watch": "NO"}
 
 
 class BlenderRenderer:

@@ -1,7 +1,8 @@
 """Procedural materials of the things in the cabin beyond a plain Principled BSDF (``mesh.material``):
-see-through plastic and liquid, and woven fabric with stitched seams. All node trees, no image files;
-each built once per name. Cheap by design: the presets trace no transmission bounces (refraction would
-render black), so see-through is a Transparent BSDF mixed in, more opaque towards grazing angles as
+see-through plastic and liquid, woven fabric, seat covers of fabric or leather with stitched seams, and
+window glass. All node trees, no image files; each built once per name (seat covers are then recoloured and
+turned to leather by node values). Cheap by design: the presets trace no transmission bounces (refraction
+would render black), so see-through is a Transparent BSDF mixed in, more opaque towards grazing angles as
 real plastic reflects more there."""
 from __future__ import annotations
 
@@ -35,18 +36,25 @@ def see_through(name: str, colour, tint, opacity: float, roughness: float = 0.05
 
 
 def seat_cover(name: str, colour, quilted: bool = True) -> bpy.types.Material:
-    """A car seat's woven cover, in each box's own coordinates (-0.5..0.5 across, so it fits every seat
-    part): a mottled tone; unless not ``quilted`` (a headrest), a darker middle insert between two
-    lengthwise stitched seams, quilted by seams across it. Each seam is a soft groove about a centimetre
-    wide (in the bump and a little darker), not a hairline: a line thinner than a pixel flickers at
-    2 samples and the denoiser smears it."""
+    """A car seat's cover, woven fabric or leather (``set_cover``), in each box's own coordinates (-0.5..0.5
+    across, so it fits every seat part): a mottled tone; unless not ``quilted`` (a headrest), a darker middle
+    insert between two lengthwise stitched seams, quilted by seams across it. Each seam is a soft groove about
+    a centimetre wide (in the bump and a little darker), not a hairline: a line thinner than a pixel flickers
+    at 2 samples and the denoiser smears it. Leather is smoother in tone, glossier and pleated the same way."""
     mat = M.material(name, colour, roughness=0.95, specular=0.2)
     if mat.get("_isu_cover"):
         return mat
     mat["_isu_cover"] = True
     nodes, links = mat.node_tree.nodes, mat.node_tree.links
     bsdf = nodes["Principled BSDF"]
-    colour_out = N.multiply(nodes, links, N.noise(nodes, links, 30.0, 2.0), colour, (1.25, 1.2, 1.15))
+    base = N.rgb(nodes, "cover_colour", colour)
+    leather = N.value(nodes, 0.0)
+    leather.node.name = "cover_leather"
+    fabric_tone = N.multiply(nodes, links, N.noise(nodes, links, 30.0, 2.0), base, (1.25, 1.2, 1.15))
+    leather_tone = N.multiply(nodes, links, N.noise(nodes, links, 6.0, 1.0), base, (1.12, 1.1, 1.08))
+    colour_out = N.mix(nodes, links, leather, fabric_tone, leather_tone)
+    links.new(N.map_range(nodes, links, leather, 0.95, 0.42), bsdf.inputs["Roughness"])
+    links.new(N.map_range(nodes, links, leather, 0.2, 0.55), bsdf.inputs["Specular IOR Level"])
     if not quilted:
         links.new(colour_out, bsdf.inputs["Base Color"])
         return mat
@@ -70,6 +78,13 @@ def seat_cover(name: str, colour, quilted: bool = True) -> bpy.types.Material:
     return mat
 
 
+def set_cover(mat: bpy.types.Material, colour, leather: float) -> None:
+    """A seat cover's colour and how much leather it is (0: fabric, 1: leather)."""
+    nodes = mat.node_tree.nodes
+    nodes["cover_colour"].outputs[0].default_value = (*colour, 1.0)
+    nodes["cover_leather"].outputs[0].default_value = leather
+
+
 def _groove(nodes, links, distance, half_width: float):
     """1 on a seam, falling linearly to 0 at ``half_width`` from it (in the box's own units)."""
     return N.math(nodes, links, "MULTIPLY_ADD", distance, -1.0 / half_width, 1.0, clamp=True)   # 1 - d / w
@@ -88,4 +103,22 @@ def woven(name: str, colour, roughness: float = 0.9) -> bpy.types.Material:
     # the cloth's lumpiness, coarse enough to resolve at 2 samples (a true weave is below a pixel)
     links.new(N.bump(nodes, links, N.noise(nodes, links, 40.0, 1.0), 0.15), bsdf.inputs["Normal"])
     mat["_isu_woven"] = True
+    return mat
+
+
+def glass(name: str = "window_glass") -> bpy.types.Material:
+    """Window glass: clear and a little green, without reflections. A Fresnel-weighted glossy reflection of
+    the cabin was tried: at 3 samples its noise made the denoiser blur the world behind the glass, and the
+    exterior's SSIM to the 64-sample reference fell from 0.99 to 0.96 (standard's mean by 0.006)."""
+    mat = bpy.data.materials.get(name) or bpy.data.materials.new(name)
+    if mat.get("_isu_glass"):
+        return mat
+    mat.use_nodes = True
+    nodes, links = mat.node_tree.nodes, mat.node_tree.links
+    nodes.clear()
+    clear, out = nodes.new("ShaderNodeBsdfTransparent"), nodes.new("ShaderNodeOutputMaterial")
+    clear.inputs["Color"].default_value = (0.86, 0.92, 0.89, 1.0)
+    links.new(clear.outputs["BSDF"], out.inputs["Surface"])
+    mat.diffuse_color = (0.86, 0.92, 0.89, 0.2)
+    mat["_isu_glass"] = True
     return mat

@@ -204,6 +204,32 @@ def lathe(name: str, profile, segments: int = 32) -> bpy.types.Mesh:
 
 
 # ---------------------------------------------------------------------- objects
+def arrays_mesh(name: str, n_vertices: int, triangles, slots=None, materials=(), uv_layers: dict | None = None,
+                smooth=True) -> bpy.types.Mesh:
+    """A triangle mesh from arrays (vertices placed later, e.g. by ``foreach_set("co", ...)``): material
+    slot per triangle, per-corner UV layers {name: (triangles, 3, 2)}, smooth shading (per triangle or all)."""
+    import numpy as np
+    triangles = np.ascontiguousarray(triangles, np.int32)
+    mesh = bpy.data.meshes.new(name)
+    mesh.vertices.add(n_vertices)
+    mesh.loops.add(len(triangles) * 3)
+    mesh.polygons.add(len(triangles))
+    mesh.loops.foreach_set("vertex_index", triangles.ravel())
+    mesh.polygons.foreach_set("loop_start", np.arange(0, len(triangles) * 3, 3, dtype=np.int32))
+    mesh.polygons.foreach_set("loop_total", np.full(len(triangles), 3, np.int32))
+    mesh.polygons.foreach_set("use_smooth", np.broadcast_to(np.asarray(smooth, bool), len(triangles)).copy())
+    for mat in materials:
+        mesh.materials.append(mat)
+    if slots is not None:
+        mesh.polygons.foreach_set("material_index", np.ascontiguousarray(slots, np.int32))
+    for layer_name, corners in (uv_layers or {}).items():
+        layer = mesh.uv_layers.new(name=layer_name)
+        layer.data.foreach_set("uv", np.ascontiguousarray(corners, np.float32).ravel())
+    mesh.update(calc_edges=True)
+    mesh.validate(clean_customdata=False)
+    return mesh
+
+
 def new_object(name: str, mesh: bpy.types.Mesh, mat: bpy.types.Material | None, collection,
                pass_index: int = 0) -> bpy.types.Object:
     if mat is not None and not mesh.materials:

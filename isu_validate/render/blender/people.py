@@ -3,8 +3,8 @@ persistent meshes whose vertices are swapped per scene (a few milliseconds), nev
 
 A person is two objects that share one anny topology split at the neck - the head (with the hair:
 its own segmentation instance, ``driver_face`` for the driver) and the rest of the body - plus the
-hair shell. The driver also has the seat belt, laid on the body by the host, and holds the phone
-where the host placed it."""
+hair shell and, over a bob, its locks (tapered cards). The driver also has the seat belt, laid on the
+body by the host, and holds the phone where the host placed it."""
 from __future__ import annotations
 
 import bpy
@@ -13,6 +13,7 @@ from mathutils import Vector
 
 from ..labels import INSTANCE_ID
 from . import mesh as M
+from .clothes import Outfit
 from .people_look import Look
 
 BELT = (0.10, 0.10, 0.11)
@@ -48,10 +49,10 @@ class Person:
         if state != self.state_path:
             data = self.state = _load(state)
             for part, index in self.maps.items():
-                source = data["hair"] if part == "hair" else data["vertices"][index]
+                source = data[part] if part in ("hair", "locks") else data["vertices"][index]
                 mesh = self.parts[part].data
                 mesh.vertices.foreach_set("co", np.ascontiguousarray(source, np.float32).ravel())
-                if part != "hair":    # the expression's skin folds (none for a face at rest)
+                if part not in ("hair", "locks"):    # the expression's skin folds (none for a face at rest)
                     crease = data["crease"][index] if "crease" in data else np.zeros(len(index), np.float32)
                     mesh.attributes["crease"].data.foreach_set("value", np.ascontiguousarray(crease, np.float32))
                 mesh.update()
@@ -86,6 +87,12 @@ class Person:
                      np.zeros(len(topo["hair_faces"]), np.uint8), [hair_mat], None)
         self.parts["hair"] = self._object(f"{self.name}_hair", mesh, self.head_id)
         self.maps["hair"] = topo["hair_i"]    # only its length counts: the hair's vertices come whole
+        if len(topo.get("lock_faces", ())):   # a bob's locks: opaque cards in the hair's material
+            cards = topo["lock_faces"]
+            mesh = _mesh(f"{self.name}_locks", int(cards.max()) + 1, cards, np.zeros(len(cards), np.uint8),
+                         [hair_mat], None)
+            self.parts["locks"] = self._object(f"{self.name}_locks", mesh, self.head_id)
+            self.maps["locks"] = np.arange(int(cards.max()) + 1)   # its vertices come whole, as the hair's
 
     def _object(self, name, mesh, pid):
         obj = bpy.data.objects.new(name, mesh)
@@ -97,34 +104,18 @@ class Person:
         self.look.set(skin, hair, shirt)
 
 
-def _mesh(name: str, n_vertices: int, triangles: np.ndarray, slots: np.ndarray, materials, uv_layers: dict | None):
-    mesh = bpy.data.meshes.new(name)
-    mesh.vertices.add(n_vertices)
-    mesh.loops.add(len(triangles) * 3)
-    mesh.polygons.add(len(triangles))
-    mesh.loops.foreach_set("vertex_index", np.ascontiguousarray(triangles, np.int32).ravel())
-    mesh.polygons.foreach_set("loop_start", np.arange(0, len(triangles) * 3, 3, dtype=np.int32))
-    mesh.polygons.foreach_set("loop_total", np.full(len(triangles), 3, np.int32))
-    mesh.polygons.foreach_set("use_smooth", np.ones(len(triangles), bool))
-    for mat in materials:
-        mesh.materials.append(mat)
-    mesh.polygons.foreach_set("material_index", np.ascontiguousarray(slots, np.int32))
-    for layer_name, corners in (uv_layers or {}).items():
-        layer = mesh.uv_layers.new(name=layer_name)
-        layer.data.foreach_set("uv", np.ascontiguousarray(corners, np.float32).ravel())
-    mesh.update(calc_edges=True)
-    mesh.validate(clean_customdata=False)
-    return mesh
+_mesh = M.arrays_mesh    # a mesh from arrays (one home: mesh.py)
 
 
 class Driver:
-    """The driver: an anny body in a T-shirt, the seat belt over it when worn, the phone in hand, and
+    """The driver: an anny body in clothes (``clothes.py``), the seat belt over them when worn, the phone in hand, and
     the driver's seat slid on its track to fit (with the belt buckle mounted on it)."""
 
     def __init__(self, rig: dict, coll, seat_parts: list):
         # one persistent person per topology (the genders differ in topology), so a change of
         # driver between frames swaps vertices instead of rebuilding meshes
         self.coll, self.persons, self.person = coll, {}, None
+        self.outfits: dict[str, Outfit] = {}     # per topology, like the persons
         self.belt = _Belt(rig["seat_belt"], coll)
         self.phone_hand = None
         self.seat = [(obj, obj.location.x) for obj in seat_parts]
@@ -144,7 +135,14 @@ class Driver:
         data = self.person.set(spec["topology"], spec["state"])
         self.slide_seat(float(data["seat_shift"]))
         self.person.set_look(f["driver_skin_tone"], f["driver_hair_colour"], f["tshirt_colour"])
-        self.belt.apply(data, f["seat_belt"] == "YES")
+        if spec["topology"] not in self.outfits:
+            self.outfits[spec["topology"]] = Outfit(f"{self.person.name}_outfit", self.coll,
+                                                    INSTANCE_ID["driver"], INSTANCE_ID["driver_face"])
+        for topology, outfit in self.outfits.items():
+            if topology != spec["topology"]:
+                outfit.hide()
+        dressed = self.outfits[spec["topology"]].apply(spec["outfit"], spec["dressed"], f)
+        self.belt.apply(dressed, f["seat_belt"] == "YES")   # the straps lie on the clothes
         self.phone_hand = None
         if "phone_centre" in data:   # the phone lies in the posed palm, turned as the rig's position says
             self.phone_hand = (Vector(data["phone_centre"].tolist()), f["phone_position"])
@@ -152,6 +150,8 @@ class Driver:
     def hide(self) -> None:
         for person in self.persons.values():
             person.show(False)
+        for outfit in self.outfits.values():
+            outfit.hide()
         self.belt.hide()
         self.slide_seat(0.0)
         self.phone_hand = None

@@ -27,7 +27,7 @@ class Studio:
         self.rig = rig
         coll = self.scene.collection
         self.coll = coll
-        self.parts = build_cabin(rig, coll)
+        self.parts, self.style = build_cabin(rig, coll)
         self.lighting = Lighting(rig, self.scene, coll)
         self.driver = Driver(rig, coll, self.parts["driver_seat"] + [bpy.data.objects["belt_buckle"]])
         self.child = Child(coll)
@@ -147,7 +147,9 @@ class Studio:
     # ------------------------------------------------------------------ per scene
     def apply(self, features: dict, extras: dict, people: dict) -> None:
         """``people``: the host's topology and state files of the driver and the child (None: absent)."""
-        self.lighting.apply(features["external_light"], features["car_lights"])
+        self.lighting.apply(features["external_light"], features["car_lights"], features["surroundings"],
+                            features["sun_direction"])
+        self.style.apply(features["cabin_trim"], features["seat_material"])
         if people.get("driver") is None:
             self.driver.hide()
         else:

@@ -9,10 +9,11 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
+from pathlib import Path
 
 import numpy as np
 
-from . import belt, child, creases, expressions, hair, regions, seated
+from . import accessories, belt, child, creases, expressions, garments, hair, regions, seated
 from .model import load_model
 from .phenotype import child_phenotype, driver_phenotype
 from .skeleton import Body
@@ -53,10 +54,12 @@ class People:
         if with_driver:
             kind = "female" if f["driver_gender"] == "FEMALE" else "male"
             style = hair_style_of(f, kind)
-            out["driver"] = {"topology": str(self.topology(kind, style)),
-                             "state": str(self.driver_state(f["driver_gender"], f["driver_height"], f["driver_weight"],
-                                                            f["driver_emotion"], f["phone_position"], style)),
-                             "kind": kind}
+            state = self.driver_state(f["driver_gender"], f["driver_height"], f["driver_weight"],
+                                      f["driver_emotion"], f["phone_position"], style)
+            top = f.get("driver_top", "TSHIRT")
+            out["driver"] = {"topology": str(self.topology(kind, style)), "state": str(state), "kind": kind,
+                             "outfit": str(self.outfit(kind, style, top)),
+                             "dressed": str(self.dressed(kind, style, top, state))}
         if f.get("child_seat") == "YES" and f.get("child") == "YES":
             front = f["child_seat_orientation"] == "FRONT_FACING"
             out["child"] = {"topology": str(self.topology("child")), "state": str(self.child_state(front)),
@@ -96,6 +99,26 @@ class People:
             state = {**_surface_state(posed, topo), "crease": crease,
                      **{k: pose[k] for k in pose if not k.startswith("d_")}}
             return self.store.put("driver", key, state)
+
+    def outfit(self, kind: str, style: str, top: str):
+        """The garments of a driver in ``top`` and trousers and the accessories, cut and modelled on the rest
+        body of the kind (the cap over the hair of the style)."""
+        key = entry_key("outfit", {"person": kind, "hair": style, "top": top})
+        found = self.store.get("outfit", key)
+        if found:
+            return found
+        with _posing(self):
+            return self.store.put("outfit", key, _outfit(kind, style, top, load_entry(self.topology(kind, style))))
+
+    def dressed(self, kind: str, style: str, top: str, state):
+        """The outfit on a posed driver: the garments' and accessories' vertices, the belt lying on the clothes."""
+        key = entry_key("dressed", {"state": Path(state).stem, "hair": style, "top": top})
+        found = self.store.get("dressed", key)
+        if found:
+            return found
+        outfit = load_entry(self.outfit(kind, style, top))
+        return self.store.put("dressed", key, _dressed(outfit, load_entry(self.topology(kind, style)),
+                                                       load_entry(state)))
 
     def child_state(self, front_facing: bool):
         key = entry_key("child", {"rig": self.child_rig, "front_facing": front_facing})
@@ -150,6 +173,8 @@ def _topology(kind: str, style: str) -> dict:
     rest = body.evaluate({})
     candidates = regions.bone_weights(model, ("head", "neck")) > 0.5
     style = hair.hair_style(rest, faces, candidates, style, 0.6 if kind == "child" else 1.0)
+    shell = hair.hair_vertices(style, rest.vertices.astype(np.float64), hair.vertex_normals(rest.vertices, faces))
+    locks = hair.lock_roots(style, shell.astype(np.float64), rest)
     uv = model.texture_coordinates[model.face_texture_coordinate_indices].cpu().numpy()
     return {"faces": faces, "uv": uv.reshape(-1, 2).astype(np.float32),
             "eye_uv": regions.eye_uv(model, uv).reshape(-1, 2),
@@ -160,16 +185,57 @@ def _topology(kind: str, style: str) -> dict:
             "hands": regions.bone_weights(model, ("wrist", "finger", "metacarpal")) > 0.5,
             "carriers": belt.carrier_mask(model),
             "hair_i": style.i, "hair_j": style.j, "hair_t": style.t, "hair_faces": style.faces,
-            "hair_thickness": style.thickness}
+            "hair_thickness": style.thickness, "lock_face": locks.face, "lock_bary": locks.bary,
+            "lock_length": locks.length, "lock_width": locks.width, "lock_lift": locks.lift,
+            "lock_crown": np.int32(locks.crown), "lock_faces": hair.lock_faces(len(locks))}
+
+
+def _outfit(kind: str, style: str, top: str, topo: dict) -> dict:
+    model = load_model()
+    faces = topo["faces"]
+    body = Body(model, driver_phenotype("FEMALE" if kind == "female" else "MALE", "H3", "W2"))
+    worn = garments.outfit(body, top, faces)
+    rest = body.evaluate({})
+    hair_lift = np.zeros(len(rest.vertices))
+    scalp = topo["hair_i"] == topo["hair_j"]
+    hair_lift[topo["hair_i"][scalp]] = topo["hair_thickness"][scalp]
+    out = {"slots": np.array(sorted(worn)), **accessories.rest_accessories(model, rest, faces, hair_lift)}
+    for slot, g in worn.items():
+        out.update(g.to_arrays(slot))
+    return out
+
+
+def _dressed(outfit: dict, topo: dict, state: dict) -> dict:
+    """Each garment's (and the cap's) vertices and crumple on the posed body, the rigid accessories placed,
+    and the belt straps lifted onto the clothes."""
+    v, faces = state["vertices"].astype(np.float64), topo["faces"]
+    normals = hair.vertex_normals(v, faces)
+    out, placed = {}, []
+    for slot in [*map(str, outfit["slots"]), "cap", "band"]:
+        g = garments.Garment.from_arrays(outfit, slot)
+        out[f"{slot}_co"], out[f"{slot}_crumple"] = garments.dress(g, v, faces, normals)
+        if slot not in ("cap", "band"):
+            # the belt lies on the cloth over the torso, pelvis and thighs only (as on the skin: belt.py)
+            carried = topo["carriers"][g.i][g.faces].all(axis=1) & ~g.band
+            placed.append((out[f"{slot}_co"], g.faces[carried]))
+    out.update({f"{name}_co": co for name, co in accessories.place(outfit, v).items()})
+    if "belt_diagonal" in state:
+        out.update(garments.lift_straps(state, placed))
+    return out
 
 
 def _surface_state(posed, topo: dict) -> dict:
-    """What the worker swaps in: the body's vertices and its hair shell; and a few joints (JOINTS)."""
+    """What the worker swaps in: the body's vertices, its hair shell and the locks on it (a bob's cards); and
+    a few joints (JOINTS)."""
     vertices = posed.vertices
     normals = hair.vertex_normals(vertices.astype(np.float64), topo["faces"])
     style = hair.HairStyle("", topo["hair_i"], topo["hair_j"], topo["hair_t"], topo["hair_faces"],
                            topo["hair_thickness"], topo["field_scalp"])
-    return {"vertices": vertices.astype(np.float32), "hair": hair.hair_vertices(style, vertices, normals),
+    shell = hair.hair_vertices(style, vertices, normals)
+    locks = hair.Locks(topo["lock_face"], topo["lock_bary"], topo["lock_length"], topo["lock_width"],
+                       topo["lock_lift"], int(topo["lock_crown"]))
+    return {"vertices": vertices.astype(np.float32), "hair": shell,
+            "locks": hair.lock_vertices(locks, topo["hair_faces"], shell),
             "joints": np.array([posed.head(b) for b in JOINTS], np.float32)}
 
 

@@ -35,8 +35,8 @@ def people_cache_dir() -> Path:
 
 # the modules whose code decides what an entry holds (posing reads the seat and wheel from cabin_geometry);
 # the cache's own tools (store, warm, checks) are not among them, so changing them keeps the cache
-CONTENT_MODULES = ("belt", "child", "expressions", "hair", "hands", "limbs", "model", "people", "phenotype",
-                   "regions", "seated", "skeleton", "surface", "../cabin_geometry")
+CONTENT_MODULES = ("accessories", "belt", "child", "expressions", "garments", "hair", "hands", "limbs", "model",
+                   "people", "phenotype", "regions", "seated", "skeleton", "surface", "../cabin_geometry")
 
 
 @lru_cache(maxsize=1)
