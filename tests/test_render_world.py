@@ -29,7 +29,10 @@ SCENE = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height": 
          "car_lights": "OFF", "external_light": "HIGH", "luggage": "NO", "phone_codriver_seat": "NO",
          "colacan_codriver_seat": "NO", "colabottle_codriver_seat": "NO", "driver_skin_tone": "MEDIUM",
          "driver_hair_colour": "BROWN", "driver_hair_style": "SHORT", "surroundings": "TREES",
-         "sun_direction": "FRONT", "cabin_trim": "GREY", "seat_material": "FABRIC"}
+         "sun_direction": "FRONT", "cabin_trim": "GREY", "seat_material": "FABRIC",
+         # isu-diverse's clothes, as isu-paper renders them (a plain T-shirt, navy trousers, nothing else)
+         "driver_top": "TSHIRT", "driver_top_print": "PLAIN", "driver_trousers_colour": "NAVY",
+         "driver_eyewear": "NONE", "driver_cap": "NO", "driver_watch": "NO"}
 
 
 def _world_folder() -> Path:
