@@ -208,6 +208,9 @@ def test_reference_train_leaves_the_shipped_model_alone_unless_it_is_named(tmp_p
     assert main(["reference", "train", "--n", "10", "--held-out", "1", "--workdir", str(tmp_path / "w")]) == 0
     assert written[-1].resolve() != shipped and written[-1] == tmp_path / "w" / "model"
     assert f"--sut-option model_dir={tmp_path / 'w' / 'model'}" in capsys.readouterr().out
-    assert main(["reference", "train", "--n", "10", "--held-out", "1", "--workdir", str(tmp_path / "w"),
-                 "--out", str(shipped)]) == 0
-    assert written[-1].resolve() == shipped  # named: replaced on purpose (re-pin afterwards)
+    # named, with other settings than the shipped model's marker says (600/200): refused, then replaced on purpose
+    named = ["reference", "train", "--n", "10", "--held-out", "1", "--workdir", str(tmp_path / "w"),
+             "--out", str(shipped)]
+    assert main(named) == 2
+    assert main(named + ["--overwrite"]) == 0
+    assert written[-1].resolve() == shipped  # (re-pin afterwards)

@@ -195,12 +195,14 @@ def test_transfer_end_to_end_resumes_and_refuses_other_settings(class_set, tmp_p
 
 def test_transfer_escapes_what_the_labels_and_sut_said(tmp_path, few_torch_threads):
     root = tmp_path / "set"
-    _save(root / "<script>x" / "a.jpg", _photos()[0])
-    m = _write_map(tmp_path, '[classes."<script>x"]\nphone_position = "YES"\n')
+    for label in ("<script>x", "<b>y"):   # the same photo labelled both ways: one answer is wrong, and shown
+        _save(root / label / "a.jpg", _photos()[0])
+    m = _write_map(tmp_path, '[classes."<script>x"]\nphone_position = "YES"\n[classes."<b>y"]\nphone_position = "NO"\n')
     out = tmp_path / "t"
     assert main(["transfer", str(root), "--labels", str(m), "--out", str(out)]) == 0
     html = (out / "report.html").read_text()
-    assert "<script>x" not in html.replace("<script>window", "") and "&lt;script&gt;x" in html
+    assert "<script>x" not in html and "<b>y" not in html
+    assert ("&lt;script&gt;x/a.jpg" in html) != ("&lt;b&gt;y/a.jpg" in html)
 
 
 # ---- recognise on real photographs without render labels
@@ -244,7 +246,7 @@ def test_bench_transfer_recipes_parse_and_a_model_recipe_runs(class_set, tmp_pat
     table = capsys.readouterr().out
     assert "shipped: model" in table and "real set" in table and "own held-out renders" in table
     row = json.loads((out / "bench.json").read_text())[0]
-    assert row["scores"]["set"]["phone_position"]["n"] == 6 and row["scores"]["renders"]["phone_position"] == 1.0
+    assert row["scores"]["set"]["phone_position"]["n"] == 6 and row["scores"]["renders"]["phone_position"] > 0.9
 
 
 # ---- clusters: frames of one driver are near-twins
