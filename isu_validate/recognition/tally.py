@@ -118,7 +118,13 @@ def auc(positives: list[float], negatives: list[float]) -> float | None:
     """P(a positive scores above a negative), ties half (Mann-Whitney); None without both."""
     if not positives or not negatives:
         return None
-    wins = sum((p > q) + 0.5 * (p == q) for p in positives for q in negatives)
+    import numpy as np
+
+    # per positive: the negatives below it, and half of those equal (sorted once: n log n, not n x m)
+    below = np.sort(np.asarray(negatives, dtype=float))
+    p = np.asarray(positives, dtype=float)
+    less, not_more = np.searchsorted(below, p, side="left"), np.searchsorted(below, p, side="right")
+    wins = float((less + 0.5 * (not_more - less)).sum())
     return round(wins / (len(positives) * len(negatives)), 4)
 
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..recognition.tally import wilson
+from ..recognition.tally import auc, wilson
 
 BOOTSTRAP = 1000
 
@@ -116,6 +116,5 @@ def _auc(answered: list[Answer], positive: str) -> float | None:
     scored = [a for a in answered if a.p_positive is not None]
     if len(scored) < len(answered) or len({a.truth == positive for a in scored}) < 2:
         return None   # some answers without a probability, or one class only: no ROC curve
-    from sklearn.metrics import roc_auc_score
-
-    return float(roc_auc_score([a.truth == positive for a in scored], [a.p_positive for a in scored]))
+    return auc([a.p_positive for a in scored if a.truth == positive],
+               [a.p_positive for a in scored if a.truth != positive])
