@@ -244,6 +244,56 @@ def test_eyes_teeth_and_hair_styles_are_where_a_face_has_them(people, model):
     assert people_module.hair_style_of({"driver_hair_style": "BY_GENDER"}, "male") == "short"
 
 
+@pytest.mark.parametrize("hands, phone", [("LAP", "NONE"), ("HAIR", "NONE"), ("LAP", "P3")])
+def test_a_free_hand_leaves_the_wheel_for_its_rig_position_and_a_phone_in_that_hand_wins(people, hands, phone):
+    """isu-diverse's driver_hands: one hand off the wheel at the rig's point, the other still on the rim, the
+    body clear of seat and wheel; a phone held in the same hand takes the hand (LAP + P3: reading)."""
+    state = _load(people.driver_state("MALE", "H2", "W2", "SERIOUS", phone, None, hands))
+    topology = _load(people.topology("male"))
+    m = driver_measures(state, topology, people.cabin)
+    for part in ("cushion", "back", "base", "headrest0"):
+        assert m[f"clear_{part}"] >= 0.0, (hands, phone, part, m)
+    assert m["clear_wheel_body"] >= 0.0 and m["clear_wheel_hands"] >= -HAND_TOUCH, (hands, phone, m)
+    clear = _wheel_clearance_by_hand(state, topology, people.cabin)
+    spec = people.cabin["hand_positions"][hands]
+    other = "left" if spec["hand"] == "right" else "right"
+    assert clear[spec["hand"]] > 0.05, f"{hands}: the {spec['hand']} hand stays {clear} m from the wheel"
+    assert clear[other] < 0.006, f"{hands}: the {other} hand left the wheel ({clear})"
+    if phone == "NONE":
+        assert "phone_centre" not in state
+        if spec["relative_to"] == "head":   # the palm at the rig's point (a few cm: the hand's own thickness)
+            target = state["head_centre"] + np.asarray(spec["offset"])
+            v = state["vertices"][topology["hands"].astype(bool)]
+            assert np.linalg.norm(v - target, axis=1).min() < 0.03, hands
+    else:
+        assert m["phone_to_palm"] < 0.016 and m["phone_front_touch"] >= 20, (hands, phone, m)
+
+
+def test_a_hand_position_the_rig_lacks_or_a_malformed_one_is_refused_with_the_fix(model, tmp_path):
+    from isu_validate.render.cabin import CabinRigError
+    from isu_validate.render.people.phenotype import driver_phenotype
+    from isu_validate.render.people.seated import seat_and_pose
+    from isu_validate.render.people.skeleton import Body
+    with pytest.raises(ValueError, match=r"no \[hand_positions.JUGGLING\]; known: WHEEL, LAP"):
+        seat_and_pose(Body(model, driver_phenotype("MALE", "H2", "W2")), load_cabin("default"), "NONE", "JUGGLING")
+    text = (Path(__file__).parents[1] / "rigs" / "cabins" / "default.toml").read_text()
+    bad = tmp_path / "bad.toml"
+    bad.write_text(text.replace("palm = [0.0, 0.0, -1.0]", "palm = \"down\"", 1))
+    with pytest.raises(CabinRigError, match=r"hand_positions.LAP\] needs .* palm and fingers = \[x, y, z\]"):
+        load_cabin(bad)
+
+
+def _wheel_clearance_by_hand(state: dict, topology: dict, cabin: dict) -> dict[str, float]:
+    """Each hand's nearest approach to the steering wheel (m): the left hand lies towards cabin +y."""
+    from isu_validate.render.cabin_geometry import wheel_solids
+    v = state["vertices"].astype(np.float64)
+    hands = topology["hands"].astype(bool)
+    middle = float(np.median(v[hands][:, 1]))
+    wheel = wheel_solids(cabin["steering_wheel"])
+    sides = {"left": hands & (v[:, 1] > middle), "right": hands & (v[:, 1] <= middle)}
+    return {side: float(min(s.sdf(v[mask]).min() for s in wheel)) for side, mask in sides.items()}
+
+
 def test_a_phone_position_with_a_malformed_finger_direction_is_refused_with_the_fix(tmp_path):
     from isu_validate.render.cabin import CabinRigError
     text = (Path(__file__).parents[1] / "rigs" / "cabins" / "default.toml").read_text()

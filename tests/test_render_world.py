@@ -32,7 +32,9 @@ SCENE = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height": 
          "sun_direction": "FRONT", "cabin_trim": "GREY", "seat_material": "FABRIC",
          # isu-diverse's clothes, as isu-paper renders them (a plain T-shirt, navy trousers, nothing else)
          "driver_top": "TSHIRT", "driver_top_print": "PLAIN", "driver_trousers_colour": "NAVY",
-         "driver_eyewear": "NONE", "driver_cap": "NO", "driver_watch": "NO"}
+         "driver_eyewear": "NONE", "driver_cap": "NO", "driver_watch": "NO",
+         # ... both hands on the wheel, the screen as used
+         "driver_hands": "WHEEL", "phone_screen": "BY_USE"}
 
 
 def _world_folder() -> Path:

@@ -102,6 +102,12 @@ def _check(raw: dict, where: str) -> None:
         if "fingers" in spec and not _triple(spec["fingers"]):
             raise CabinRigError(f"{where}: [phone_positions.{name}] fingers must be a direction [x, y, z] "
                                 f"(where the fingers point; leave it out for away from the shoulder)")
+    for name, spec in raw.get("hand_positions", {}).items():
+        if spec.get("hand") not in ("left", "right") or spec.get("relative_to") not in ("head", "shoulder", "wheel") \
+                or not all(_triple(spec.get(k)) for k in ("offset", "palm", "fingers")):
+            raise CabinRigError(f"{where}: [hand_positions.{name}] needs hand = 'left'|'right', relative_to = "
+                                f"'head'|'shoulder'|'wheel', offset = [x, y, z] and the directions palm and "
+                                f"fingers = [x, y, z] (see rigs/cabins/default.toml)")
 
 
 def _check_lighting(light: dict, where: str) -> None:

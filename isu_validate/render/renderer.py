@@ -41,7 +41,9 @@ from .worker import BlenderWorker, WorkerCrashed, WorkerFailed, WorkerTimeout
 # 8: short hair fuller on top with sideburns, brows darker than the hair, GREY hair darker; 9 (issues 32, 44): locks
 # over the bob, a world outside the windows (HDRI by light and surroundings, the sun in HIGH light), a furnished
 # cabin in car styles, garments and accessories
-RENDERER_VERSION = "isu-blender-9"
+# 10 (issue 44): hands off the wheel without a phone (isu-diverse's driver_hands), the phone's screen dark in a
+# call at the ear
+RENDERER_VERSION = "isu-blender-10"
 
 # what the worker shows for a feature the scene space does not have (or that is inactive)
 DEFAULTS = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height": "H2", "driver_weight": "W2",
@@ -57,7 +59,11 @@ DEFAULTS = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height
             # what the driver wears beyond the T-shirt's colour (isu-diverse varies it; isu-paper: a plain T-shirt)
             "driver_top": "TSHIRT", "driver_top_print": "PLAIN", "driver_print_colour": "NAVY",
             "driver_jacket_colour": "BLACK", "driver_trousers_colour": "NAVY", "driver_eyewear": "NONE",
-            "driver_cap": "NO", "driver_watch": "NO"}
+            "driver_cap": "NO", "driver_watch": "NO",
+            # what the hands do besides holding a phone (isu-diverse varies it; isu-paper: both on the wheel)
+            "driver_hands": "WHEEL",
+            # the phone in the hand: lit while read, dark at the ear in a call (isu-diverse: also always on or off)
+            "phone_screen": "BY_USE"}
 
 
 class BlenderRenderer:

@@ -116,6 +116,9 @@ def build_luggage(coll) -> tuple[Group, bpy.types.Material]:
     return g, body_mat
 
 
+PHONE_AT_EAR = ("P1", "P2")   # the phone positions of a call (rigs/cabins/default.toml)
+
+
 def build_phone(coll, instance: str) -> Group:
     """A 152 x 74 x 8.5 mm smartphone centred on its origin, long axis along local y, screen on local +z:
     a graphite case round it, black glass in front with a thin bezel round the lit home screen (the same
@@ -244,7 +247,7 @@ class Objects:
     def apply(self, f: dict, hand_pose) -> None:
         self._child_seat(f)
         self._luggage(f)
-        self._phone_in_hand(hand_pose)
+        self._phone_in_hand(hand_pose, f.get("phone_screen", "BY_USE"))
         for feature, (part, build) in ON_CODRIVER_SEAT.items():
             self._on_codriver_seat(feature, f.get(feature) == "YES", part, build)
 
@@ -278,7 +281,7 @@ class Objects:
         group.place(anchor, (0, 0, math.radians(f["luggage_orientation"])))
         group.show(True)
 
-    def _phone_in_hand(self, hand_pose) -> None:
+    def _phone_in_hand(self, hand_pose, screen: str) -> None:
         if hand_pose is None:
             self._show_only("phone:", None)
             return
@@ -286,6 +289,11 @@ class Objects:
         point, position = hand_pose
         group.place(point, euler_deg(self.rig["phone_positions"][position]["rotation_deg"]))
         group.show(True)
+        # a phone held to the ear turns its screen off (its proximity sensor): only black glass shows
+        lit = screen == "ON" or (screen == "BY_USE" and position not in PHONE_AT_EAR)
+        for obj in group.parts:
+            if obj.name.startswith("phone_screen"):
+                obj.hide_render = not lit
 
     def _on_codriver_seat(self, feature: str, present: bool, part: str, build) -> None:
         if not present:

@@ -18,8 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .hair import _clip, vertex_normals
-from .regions import _ARM, _along_upper_arm, _scale, bone_weights
+from .hair import clip_mesh, vertex_normals
+from .regions import ARM_BONES, along_upper_arm, body_scale, bone_weights
 from .skeleton import Body, Posed
 
 TOPS = ("TSHIRT", "LONG_SLEEVE", "SHIRT", "HOODIE", "JACKET")
@@ -92,9 +92,9 @@ class _RestFrame:
 
     def __init__(self, model, rest: Posed):
         self.v = rest.vertices.astype(np.float64)
-        self.s = _scale(rest)
+        self.s = body_scale(rest)
         self.rest = rest
-        self.arm = bone_weights(model, _ARM) > 0.5
+        self.arm = bone_weights(model, ARM_BONES) > 0.5
         self.neck_skin = bone_weights(model, ("neck",)) > 0.5
         self.along = along_arm(self.v, rest)
         self.root = rest.head("root")
@@ -164,7 +164,7 @@ class _RestFrame:
 
 def along_arm(v: np.ndarray, rest: Posed) -> np.ndarray:
     """Per vertex, where it lies along its arm: 0 at the shoulder joint, 1 at the elbow, 2 at the wrist."""
-    upper = _along_upper_arm(v, rest)
+    upper = along_upper_arm(v, rest)
     out = upper.copy()
     for side, sign in (("L", 1), ("R", -1)):
         b, c = rest.head(f"lowerarm01.{side}"), rest.head(f"wrist.{side}")
@@ -191,7 +191,7 @@ def _cut(pieces: list[Piece], faces: np.ndarray, rest: Posed) -> Garment:
 
 
 def cut_piece(piece: Piece, faces: np.ndarray, v: np.ndarray) -> Garment:
-    i, j, t, shell = _clip(faces, piece.field)
+    i, j, t, shell = clip_mesh(faces, piece.field)
 
     def at(values):           # a per-anny-vertex value at the cut's vertices
         return (1 - t) * values[i] + t * values[j]

