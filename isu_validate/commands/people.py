@@ -45,5 +45,5 @@ def cmd_check(args) -> int:
             shown, unit = f"{value:.0f}", " vertices"
         else:
             shown, unit = f"{value * 1000:.1f}", " mm"
-        print(f"{name:<32} {shown:>9}{unit}  {' '.join(key)}", file=sys.stdout)
+        print(f"{name:<32} {shown:>9}{unit}  {' '.join(str(k) for k in key if k is not None)}", file=sys.stdout)
     return 0

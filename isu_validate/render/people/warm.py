@@ -32,9 +32,21 @@ def driver_grid(limit: int | None = None) -> list[tuple]:
     return grid
 
 
+# the bodies at the corners of the height and weight classes
+CORNERS = (("FEMALE", "H1", "W1"), ("MALE", "H4", "W4"), ("FEMALE", "H4", "W1"), ("MALE", "H1", "W4"))
+
+
+def hands_grid(cabin: dict, limit: int | None = None) -> list[tuple]:
+    """Each of the rig's empty-hand positions (isu-diverse's driver_hands) without a phone, on the bodies at the
+    classes' corners (with a ``limit``: on one), as ``People.driver_state`` arguments."""
+    corners = CORNERS[:1] if limit else CORNERS
+    return [(gender, height, weight, "SERIOUS", "NONE", None, hands)
+            for hands in cabin.get("hand_positions", {}) for gender, height, weight in corners]
+
+
 def warm(people: People, limit: int | None = None) -> dict:
     """Pose every driver and both children into the cache; returns counts and the time of the misses."""
-    grid = driver_grid(limit)
+    grid = driver_grid(limit) + hands_grid(people.cabin, limit)
     outfits = outfit_grid(limit)
     progress = Progress(len(grid) + 2 + len(outfits), label="people", verdicts=False)
     before = people.misses
@@ -61,7 +73,7 @@ def outfit_grid(limit: int | None = None) -> list[tuple]:
 def check(people: People, limit: int | None = None) -> dict:
     """Worst figures over every (cached or posed) body: clearances, belt, phone in hand."""
     worst: dict[str, tuple[float, tuple]] = {}
-    grid = driver_grid(limit)
+    grid = driver_grid(limit) + hands_grid(people.cabin, limit)
     progress = Progress(len(grid), label="checked", verdicts=False)
     topologies = {kind: load_entry(people.topology(kind)) for kind in ("male", "female")}
     for key in grid:
