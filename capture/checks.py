@@ -88,10 +88,9 @@ def intrinsics_intervals(sol: Solution) -> dict:
     return out
 
 
-def undetermined_intrinsics(sol: Solution, intervals: dict | None = None) -> str | None:
+def undetermined_intrinsics(sol: Solution, intervals: dict) -> str | None:
     """Why the views do not determine the intrinsics themselves (parameters, not projections), with the
     95% intervals; None when they do."""
-    intervals = intervals or intrinsics_intervals(sol)
     w, h = sol.image_size
     scale = {"fx": intervals["fx"]["value"], "fy": intervals["fy"]["value"], "cx": w, "cy": h}
     loose = [k for k, v in intervals.items() if not Z95 * v["stdev"] <= DETERMINED_95 * abs(scale[k])]

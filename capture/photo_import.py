@@ -16,14 +16,15 @@ from __future__ import annotations
 
 import datetime as _dt
 import hashlib
-import json
 import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from isu_validate.atomic import write_text
+from isu_validate.atomic import write_json
 from isu_validate.errors import InputError
 from isu_validate.image_files import expand_images
+
+from .sidecar import sidecar_path
 
 RAW_SUFFIXES = (".dng", ".cr2", ".cr3", ".nef", ".arw", ".orf", ".rw2", ".raf", ".pef", ".srw")
 PHOTO_SUFFIXES = (".jpg", ".jpeg", ".png", ".tif", ".tiff", ".webp")
@@ -253,14 +254,14 @@ def import_photos(items, out: str | Path, exposure_us=None, iso: float | None = 
             for folder, group in groups.items()}
     for folder, frames in plan.items():       # every clash is found before anything is written
         _check_names(groups[folder], rename)
-        taken = [str(frame) for _, frame in frames if frame.exists() or frame.with_suffix(".json").exists()]
+        taken = [str(frame) for _, frame in frames if frame.exists() or sidecar_path(frame).exists()]
         if taken:
             raise ImportFailed(f"{taken[0]} already exists; import into a new --out folder")
     for folder, frames in plan.items():
         (out / folder).mkdir(parents=True, exist_ok=True)
         for i, (photo, frame) in enumerate(frames):
             shutil.copyfile(photo.path, frame)           # the camera's bytes, unchanged
-            write_text(frame.with_suffix(".json"), json.dumps(sidecar(photo, frame.name, first_index + i), indent=2))
+            write_json(sidecar_path(frame), sidecar(photo, frame.name, first_index + i), indent=2)
         result.folders[folder] = [frame for _, frame in frames]
         if not rename:
             from .camera import camera_from_dict, write_toml

@@ -281,6 +281,9 @@ def test_a_hand_position_the_rig_lacks_or_a_malformed_one_is_refused_with_the_fi
     bad.write_text(text.replace("palm = [0.0, 0.0, -1.0]", "palm = \"down\"", 1))
     with pytest.raises(CabinRigError, match=r"hand_positions.LAP\] needs .* palm and fingers = \[x, y, z\]"):
         load_cabin(bad)
+    bad.write_text(text.replace("\nat_ear = true", "\nat_ear = \"yes\"", 1))
+    with pytest.raises(CabinRigError, match=r"phone_positions.P1\] at_ear must be true or false"):
+        load_cabin(bad)
 
 
 def _wheel_clearance_by_hand(state: dict, topology: dict, cabin: dict) -> dict[str, float]:

@@ -180,7 +180,8 @@ def test_a_dataset_records_its_sensor_effects_repeats_them_and_refuses_other_var
     assert _dataset(tmp_path / "b", "--n", "3", "--seed", "2", "--sensor-effects", "strong") == 0
     assert _dataset(tmp_path / "plain", "--n", "3", "--seed", "2") == 0
     rows, again, plain = _rows(tmp_path / "a"), _rows(tmp_path / "b"), _rows(tmp_path / "plain")
-    for row, twin, untouched in zip(rows, again, plain):
+    assert len(rows) == len(again) == len(plain) == 3
+    for row, twin, untouched in zip(rows, again, plain, strict=True):
         assert row["variety"] == twin["variety"] and set(row["variety"]) == {"sensor"}
         image = (tmp_path / "a" / row["file_name"]).read_bytes()
         assert image == (tmp_path / "b" / row["file_name"]).read_bytes()

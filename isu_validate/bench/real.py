@@ -115,8 +115,9 @@ def response_rows(photos, with_defaults: bool = True) -> list[dict]:
         data = frames_mod.load([imported.out / folder])
         frames = bracket(data.frames)
         curves = {"isu-validate (exposure fit)": fit_response(data.frames).linear}
-        bgr = [cv2.imread(str(f.path)) for f in frames]
-        times = np.array([f.exposure_us * 1e-6 for f in frames], np.float32)
+        # the frames as the fit saw them (repeats of a setting averaged), and their exposure time x gain
+        bgr = [np.ascontiguousarray((f.image[..., ::-1] * 255.0).round().astype(np.uint8)) for f in frames]
+        times = np.array([f.product * 1e-6 for f in frames], np.float32)
         opencv = cv2.createCalibrateDebevec().process(bgr, times)[:, 0, ::-1].astype(float)
         curves["OpenCV CalibrateDebevec"] = finish_curve(opencv)
         if with_defaults:

@@ -22,6 +22,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..atomic import write_json, write_text
 from ..errors import InputError
 from ..transfer.arguments import add_real_set_arguments, parse_groups
 
@@ -91,10 +92,10 @@ def run(args) -> int:
                      "transfer_s": summary["seconds"], "summary": summary})
     table = format_table(rows)
     print(table)
-    (args.out / "table.txt").write_text(table + "\n")
-    (args.out / "bench.json").write_text(json.dumps(
-        [{k: v for k, v in r.items() if k != "summary"} | {"scores": _headline(r["summary"])} for r in rows],
-        indent=1) + "\n")
+    write_text(args.out / "table.txt", table + "\n")
+    write_json(args.out / "bench.json",
+               [{k: v for k, v in r.items() if k != "summary"} | {"scores": _headline(r["summary"])} for r in rows],
+               indent=1)
     return 0
 
 
@@ -120,11 +121,12 @@ def _train(recipe: Recipe, folder: Path, args) -> tuple[Path, Path, str]:
          "held_out": args.held_out, "seed": args.seed, "camera_jitter": None, "sensor_effects": None,
          **recipe.options}
     model, made = folder / "model", json.dumps(o, sort_keys=True)
-    if (folder / "recipe.json").is_file() and (folder / "recipe.json").read_text() != made:
+    stored = (folder / "recipe.json").read_text() if (folder / "recipe.json").is_file() else made
+    if stored != made:
         raise InputError(f"{folder} holds recipe {recipe.name} made with other settings "
-                         f"({(folder / 'recipe.json').read_text()}); choose another --out or recipe name")
+                         f"({stored}); choose another --out or recipe name")
     folder.mkdir(parents=True, exist_ok=True)
-    (folder / "recipe.json").write_text(made)
+    write_text(folder / "recipe.json", made)
     description = f"{RENDERER_VERSION}, " + ", ".join(f"{k}={v}" for k, v in o.items())
     if (model / "heads.npz").is_file():
         return model, folder / "held-out", description

@@ -130,6 +130,7 @@ def _exposures(text: str) -> list[float]:
 
 def run_import(args) -> int:
     from capture.photo_import import import_photos
+    from capture.sidecar import load_sidecar
     from isu_validate.errors import InputError
     if (args.out is None) == (args.pair is None):
         raise InputError("give --out DIR (a folder of imported frames) or --pair PAIRS/<sample>, one of the two")
@@ -140,11 +141,11 @@ def run_import(args) -> int:
     else:
         from isu_validate.archive.output_dir import claim_output
         output = claim_output(args.out, "capture import", {}, overwrite=None)
-        output.mark()
         result = import_photos(args.photos, args.out, args.exposure_us, args.iso, args.auto, args.burst_gap)
+        output.mark()      # only once something was imported: a refused import leaves no marked, empty folder
     for folder, frames in result.folders.items():
         where = result.out / folder
-        sidecars = [json.loads(f.with_suffix(".json").read_text()) for f in frames]
+        sidecars = [load_sidecar(f) for f in frames]
         times = ", ".join(f"{s['exposure_us'] / 1e6:g}" for s in sidecars)
         isos = ", ".join(sorted({format(s["iso"], "g") for s in sidecars}))
         modes = {"auto" if s["auto_exposure"] else "manual" for s in sidecars}

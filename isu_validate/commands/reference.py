@@ -7,6 +7,7 @@ from pathlib import Path
 
 from ..devices import add_device_argument, add_render_device_argument
 from ..errors import InputError
+from ..dataset.settings import VARIETY
 from . import add_overwrite_option, add_variety_arguments
 
 
@@ -52,7 +53,6 @@ def register(sub) -> None:
 
 DEFAULTS = {"n": 600, "held_out": 200, "seed": 0, "preset": "draft", "camera": "default", "cabin": "default"}
 FROM_SCRATCH = ("n", "held_out", "seed", "preset", "check_preset", "camera", "cabin")
-VARIETY = ("camera_jitter", "sensor_effects")   # in the output's identity only when given (older models keep theirs)
 
 
 def cmd_train(args) -> int:

@@ -14,8 +14,10 @@ from ..errors import InputError
 
 FOCUS_MODES = ("failing", "passing")
 RULE_PREFIX = "rule:"
+# the variety a command takes (--camera-jitter, --sensor-effects; `dataset`, `reference train`): off, they are
+# left out of an output's identity, so datasets and models made before them resume
+VARIETY = ("camera_jitter", "sensor_effects")
 # how the work is spread: may change between a start and its --resume
-VARIETY = ("camera_jitter", "sensor_effects")   # off ("") they are left out of the identity: older datasets resume
 NOT_IDENTITY = ("workers", "cluster", "render_device", "device")   # how the work is done: a resume may change them
 
 

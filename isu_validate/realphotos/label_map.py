@@ -38,17 +38,6 @@ class LabelMap:
     absent: dict[str, str]                 # feature -> answer when no box class mapping it is in the photo
     digest: str                            # of the map's meaning (what decides a measurement)
 
-    @property
-    def features(self) -> list[str]:
-        """Every feature some label answers, in first-mentioned order."""
-        seen: dict[str, None] = {}
-        for table in (*self.classes.values(), *self.boxes.values(), self.absent):
-            seen.update(dict.fromkeys(table))
-        return list(seen)
-
-    def box_features(self) -> set[str]:
-        return {f for answers in self.boxes.values() for f in answers}
-
 
 def load_label_map(path: str | Path, space: SceneSpace) -> LabelMap:
     path = Path(path)

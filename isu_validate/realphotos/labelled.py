@@ -20,7 +20,6 @@ from .layouts import Box, PhotoSet
 class LabelledPhoto:
     path: Path
     answers: dict[str, str]            # feature -> true answer (an option of its question)
-    labels: tuple[str, ...]            # the set's own labels of this photo (classes, then box classes)
     boxes: tuple[Box, ...] = ()
 
 
@@ -52,8 +51,7 @@ def label_photos(photo_set: PhotoSet, label_map: LabelMap, skip_conflicts: bool 
         if not answers:
             out.unanswered += 1
             continue
-        out.photos.append(LabelledPhoto(photo.path, answers, tuple(photo.classes) + tuple(b.label for b in photo.boxes),
-                                        photo.boxes))
+        out.photos.append(LabelledPhoto(photo.path, answers, photo.boxes))
     if not out.photos:
         raise InputError(f"no photo of {photo_set.root} has a label that {label_map.path} maps (its labels: "
                          f"{', '.join(sorted(out.unmapped)) or 'none'})")

@@ -123,7 +123,8 @@ def _yolo(root: Path) -> PhotoSet:
     import yaml
     from PIL import Image
 
-    config = root if root.is_file() else _yaml_files(root)[0] if _yaml_files(root) else None
+    configs = [] if root.is_file() else _yaml_files(root)
+    config = root if root.is_file() else configs[0] if configs else None
     if config is None:
         raise InputError(f"{root} has no data.yaml: a YOLO set names its classes there")
     base = config.parent

@@ -96,18 +96,25 @@ def _check(raw: dict, where: str) -> None:
         raise CabinRigError(f"{where}: [phone_positions] lacks {', '.join(missing)}; each needs hand, "
                             f"relative_to, offset and rotation_deg")
     for name, spec in positions.items():
-        if spec.get("hand") not in ("left", "right") or spec.get("relative_to") not in ("head", "shoulder", "wheel"):
+        if not _reaches(spec):
             raise CabinRigError(f"{where}: [phone_positions.{name}] needs hand = 'left'|'right' and "
                                 f"relative_to = 'head'|'shoulder'|'wheel'")
         if "fingers" in spec and not _triple(spec["fingers"]):
             raise CabinRigError(f"{where}: [phone_positions.{name}] fingers must be a direction [x, y, z] "
                                 f"(where the fingers point; leave it out for away from the shoulder)")
+        if not isinstance(spec.get("at_ear", False), bool):
+            raise CabinRigError(f"{where}: [phone_positions.{name}] at_ear must be true or false (a call: the "
+                                f"screen is dark), got {spec['at_ear']!r}")
     for name, spec in raw.get("hand_positions", {}).items():
-        if spec.get("hand") not in ("left", "right") or spec.get("relative_to") not in ("head", "shoulder", "wheel") \
-                or not all(_triple(spec.get(k)) for k in ("offset", "palm", "fingers")):
+        if not (_reaches(spec) and all(_triple(spec.get(k)) for k in ("offset", "palm", "fingers"))):
             raise CabinRigError(f"{where}: [hand_positions.{name}] needs hand = 'left'|'right', relative_to = "
                                 f"'head'|'shoulder'|'wheel', offset = [x, y, z] and the directions palm and "
                                 f"fingers = [x, y, z] (see rigs/cabins/default.toml)")
+
+
+def _reaches(spec: dict) -> bool:
+    """A phone or hand position names the hand that goes there and what its offset is measured from."""
+    return spec.get("hand") in ("left", "right") and spec.get("relative_to") in ("head", "shoulder", "wheel")
 
 
 def _check_lighting(light: dict, where: str) -> None:

@@ -51,6 +51,13 @@ def cola_label(width: int = 256, height: int = 64) -> np.ndarray:
     return img
 
 
+def screen_lit(setting: str, at_ear: bool) -> bool:
+    """Whether the held phone's screen glows: isu-diverse's ``phone_screen`` ON or OFF, or BY_USE: lit while
+    read, dark at the ear (a phone position the cabin rig marks ``at_ear``: the proximity sensor turns it off
+    in a call)."""
+    return setting == "ON" or (setting == "BY_USE" and not at_ear)
+
+
 def home_screen(width: int = 96, height: int = 200, seed: int = 3) -> np.ndarray:
     """A phone's lit home screen: a soft gradient wallpaper, a status bar, a 4x5 grid of app icons
     (rounded squares in assorted colours) and a dock of four."""

@@ -103,6 +103,10 @@ def read_real_sets(settings: TransferSettings, space: SceneSpace) -> list[RealSe
                          "for all sets, or one per set in the same order")
     if settings.limit is not None and settings.limit < 1:
         raise InputError(f"--limit must be 1 or more, got {settings.limit}")
+    unknown = set(settings.groups) - {Path(r).name for r in settings.real} - set(settings.real)
+    if unknown:
+        raise InputError(f"--groups names {', '.join(sorted(unknown))}, which is no real set given "
+                         f"({', '.join(Path(r).name for r in settings.real)})")
     sets, names = [], set()
     for i, root in enumerate(settings.real):
         label_map = load_label_map(settings.labels[min(i, len(settings.labels) - 1)], space)
@@ -120,10 +124,6 @@ def read_real_sets(settings: TransferSettings, space: SceneSpace) -> list[RealSe
             raise InputError(f"the groups file of {root} names no group for {missing} of its labelled photos "
                              f"(e.g. {next(i.name for i in items if i.group is None)}): list every photo")
         sets.append(RealSet(name, labelled, items))
-    unknown = set(settings.groups) - {Path(r).name for r in settings.real} - set(settings.real)
-    if unknown:
-        raise InputError(f"--groups names {', '.join(sorted(unknown))}, which is no real set given "
-                         f"({', '.join(Path(r).name for r in settings.real)})")
     return sets
 
 

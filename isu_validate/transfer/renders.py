@@ -16,7 +16,6 @@ import numpy as np
 
 from ..dataset.folder import DatasetDir
 from ..errors import InputError, InputNotFound
-from ..image_files import IMAGE_SUFFIXES
 from ..space import SceneSpace
 from .ask import Item
 
@@ -42,13 +41,12 @@ def render_images(folder: Path) -> list[Path]:
     if not folder.is_dir():
         raise InputNotFound(f"render set {folder} is not a folder: give a dataset (`isu-validate dataset --out`) "
                             "or a folder of rendered images")
-    if DatasetDir(folder).is_dataset():
-        return [folder / f["file_name"] for _, e in sorted(DatasetDir(folder).entries().items())
+    dataset = DatasetDir(folder)
+    if dataset.is_dataset():
+        return [folder / f["file_name"] for _, e in sorted(dataset.entries().items())
                 if e.get("status") == "ok" for f in e["files"] if f.get("variant") == "render"]
-    images = sorted(p for p in folder.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES and p.is_file())
-    if not images:
-        raise InputError(f"render set {folder} holds no images")
-    return images
+    from ..realism.images import list_images   # frames only: a contact sheet or a mask would bias KID/FID
+    return list_images(folder)
 
 
 def held_out_records(model_dir: Path, space: SceneSpace, features: list[str]) -> tuple[list[dict], dict]:

@@ -48,12 +48,13 @@ def score(answers: list[Answer], options: tuple[str, ...] | list[str], seed: int
     said = np.array([a.said for a in answered])
     hits = int((truth == said).sum())
     classes = sorted(set(truth))
+    groups = _groups(answered)
     labels = list(dict.fromkeys([*options, *sorted(set(said) - set(options))]))
     out.update(accuracy=hits / len(answered), accuracy_ci95=wilson(hits, len(answered)),
                recall={c: _recall(truth, said, c) for c in classes},
                balanced_accuracy=balanced_accuracy(truth, said),
-               balanced_accuracy_ci95=_bootstrap_ba(truth, said, seed, _groups(answered)),
-               bootstrap_unit="group" if _groups(answered) is not None else "photo",
+               balanced_accuracy_ci95=_bootstrap_ba(truth, said, seed, groups),
+               bootstrap_unit="group" if groups is not None else "photo",
                confusion={"labels": labels,
                           "rows": {c: [int(((truth == c) & (said == s)).sum()) for s in labels] for c in classes}},
                auc=_auc(answered, positive_class(options)),

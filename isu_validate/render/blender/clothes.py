@@ -45,6 +45,7 @@ class Outfit:
         self.name, self.coll, self.body_id, self.head_id = name, coll, body_id, head_id
         self.built: dict[str, dict[str, bpy.types.Object]] = {}    # outfit file -> objects by part
         self.dressed_path = None
+        self.data: dict = {}            # the dressed arrays of dressed_path
         self.current = None
         self.fabric = {slot: _fabric(f"{name}_{slot}") for slot in ("top", "outer", "trousers", "cap")}
         self.frame = M.material(f"{name}_frame", (0.012, 0.010, 0.010), roughness=0.25)
@@ -63,7 +64,9 @@ class Outfit:
             self.built[outfit] = self._build(_load(outfit))
         self.hide()
         objects = self.built[outfit]
-        data = _load(dressed)
+        if dressed != self.dressed_path:     # the same posed body again (another light, colour...): no reload
+            self.data = _load(dressed)
+        data = self.data
         if dressed != self.dressed_path or outfit != self.current:
             for part, obj in objects.items():
                 mesh = obj.data

@@ -116,9 +116,6 @@ def build_luggage(coll) -> tuple[Group, bpy.types.Material]:
     return g, body_mat
 
 
-PHONE_AT_EAR = ("P1", "P2")   # the phone positions of a call (rigs/cabins/default.toml)
-
-
 def build_phone(coll, instance: str) -> Group:
     """A 152 x 74 x 8.5 mm smartphone centred on its origin, long axis along local y, screen on local +z:
     a graphite case round it, black glass in front with a thin bezel round the lit home screen (the same
@@ -287,10 +284,10 @@ class Objects:
             return
         group = self._group("phone:hand", lambda: build_phone(self.coll, "phone"))
         point, position = hand_pose
-        group.place(point, euler_deg(self.rig["phone_positions"][position]["rotation_deg"]))
+        spec = self.rig["phone_positions"][position]
+        group.place(point, euler_deg(spec["rotation_deg"]))
         group.show(True)
-        # a phone held to the ear turns its screen off (its proximity sensor): only black glass shows
-        lit = screen == "ON" or (screen == "BY_USE" and position not in PHONE_AT_EAR)
+        lit = art.screen_lit(screen, spec.get("at_ear", False))    # dark: only the black glass shows
         for obj in group.parts:
             if obj.name.startswith("phone_screen"):
                 obj.hide_render = not lit

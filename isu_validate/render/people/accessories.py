@@ -12,12 +12,11 @@ from __future__ import annotations
 import numpy as np
 
 from .garments import Garment, Piece, along_arm, cut_piece, dress
-from .regions import bone_weights
+from .regions import body_scale, bone_weights
 from .skeleton import Posed
 from .surface import Surface
 
-ACCESSORIES = ("glasses", "sunglasses", "cap", "watch")
-RIGID = {"glasses": "head", "sunglasses": "head", "brim": "head", "watch": "wrist"}
+RIGID = {"glasses": "head", "sunglasses": "head", "lenses": "head", "brim": "head", "watch": "wrist"}
 _FRAME_R, _BAND_W = 0.0016, 0.018
 _WATCH_AT = 1.96      # along the arm (1 the elbow, 2 the wrist): where the watch's middle is
 
@@ -29,7 +28,7 @@ def rest_accessories(model, rest: Posed, faces: np.ndarray, hair_lift: np.ndarra
     the hair stands off the scalp (0 where there is none)."""
     v = rest.vertices.astype(np.float64)
     eyes = (rest.head("eye.L"), rest.head("eye.R"))
-    s = float(((eyes[0] + eyes[1]) / 2)[2] - rest.head("root")[2]) / 0.69
+    s = body_scale(rest)
     out = {}
     skull = np.flatnonzero((bone_weights(model, ("head",)) > 0.95) & (v[:, 2] > eyes[0][2] + 0.02 * s))
     forearm = np.flatnonzero(bone_weights(model, ("lowerarm02.L",)) > 0.6)
@@ -54,8 +53,8 @@ def place(rest_arrays: dict, vertices: np.ndarray) -> dict[str, np.ndarray]:
     out = {}
     for rig in ("head", "wrist"):
         scale, R, shift = similarity(rest_arrays[f"anchor_{rig}_rest"], v[rest_arrays[f"anchor_{rig}"]])
-        for name in (*RIGID, "lenses"):
-            if RIGID.get(name, "head") == rig:
+        for name, on in RIGID.items():
+            if on == rig:
                 out[name] = (scale * rest_arrays[f"{name}_v"] @ R.T + shift).astype(np.float32)
     return out
 
@@ -187,16 +186,10 @@ def _fan(ring: np.ndarray, centre: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.concatenate([ring, centre[None]]), np.array(faces, np.int32)
 
 
-def _slab(top: np.ndarray, thickness: float, outward: bool = False, centre=None) -> tuple[np.ndarray, np.ndarray]:
-    """A strip (rows of 2 points) made solid: its other face ``thickness`` below it (or inward towards
-    ``centre``), and the sides closed."""
+def _slab(top: np.ndarray, thickness: float) -> tuple[np.ndarray, np.ndarray]:
+    """A strip (rows of 2 points) made solid: its other face ``thickness`` below it, and the sides closed."""
     top = np.asarray(top, np.float64)
-    if outward:
-        rim = top - np.asarray(centre)
-        normal = rim / np.linalg.norm(rim, axis=2, keepdims=True)
-        bottom = top - normal * thickness
-    else:
-        bottom = top - np.array([0.0, 0.0, thickness])
+    bottom = top - np.array([0.0, 0.0, thickness])
     m = len(top)
     verts = np.concatenate([top.reshape(-1, 3), bottom.reshape(-1, 3)])
     T, B = (lambda r, c: r * 2 + c), (lambda r, c: 2 * m + r * 2 + c)

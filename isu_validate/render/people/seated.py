@@ -81,12 +81,10 @@ def seat_and_pose(body: Body, rig: dict, phone_position: str = "NONE", hands: st
     straight = body.evaluate({**deltas, **{b: m for b, m in arm.items() if not b.startswith("finger")}})
     phone = None
     for side, grip in grips.items():
-        if grip.on_wheel:
+        if grip.holds == "wheel":
             point, tangent, _ = rim_point(rig["steering_wheel"], GRIP_CLOCK[side])
             arm.update(wrap(straight, side, point, tangent, rig["steering_wheel"]["radius"] * RIM_TUBE + SKIN_GAP))
-        elif grip.free:
-            continue      # a free hand keeps its fingers straight (resting, reaching, touching)
-        else:
+        elif grip.holds == "phone":
             frame = hand_frame(straight, side)
             phone = _phone_in(frame, spec, _palm_skin(straight, frame, side, body.model))
             arm.update(close_on(straight, side, phone_box(*phone).sdf, frame.p))
@@ -193,8 +191,7 @@ class Grip:
     G_hand: np.ndarray
     a: np.ndarray
     along: float
-    on_wheel: bool
-    free: bool = False    # holds nothing (a rig hand position)
+    holds: str            # "wheel", "phone" or "nothing" (a rig hand position: its fingers stay straight)
 
 
 def _wheel_grip(rest: Posed, side: str, rig: dict) -> Grip:
@@ -208,7 +205,7 @@ def _wheel_grip(rest: Posed, side: str, rig: dict) -> Grip:
     if p @ (-radial) < 0:                               # the palm faces the wheel's centre
         p = -p
     tube = rig["steering_wheel"]["radius"] * RIM_TUBE
-    return _grip(rest, side, a, p, point - p * (tube + GRIP_PALM), GRIP_ALONG, True)
+    return _grip(rest, side, a, p, point - p * (tube + GRIP_PALM), GRIP_ALONG, "wheel")
 
 
 def _phone_grip(rest: Posed, side: str, spec: dict, rig: dict, head_centre: np.ndarray) -> Grip:
@@ -221,7 +218,7 @@ def _phone_grip(rest: Posed, side: str, spec: dict, rig: dict, head_centre: np.n
     away = np.asarray(spec.get("fingers", centre - rest.head(f"upperarm01.{side}")), float)
     a = xp if xp @ away > 0 else -xp
     palm = centre - zp * (PHONE_THICKNESS / 2 + PALM_HALF) - yp * PHONE_SHIFT
-    return _grip(rest, side, a, zp, palm, PHONE_ALONG, False)
+    return _grip(rest, side, a, zp, palm, PHONE_ALONG, "phone")
 
 
 def _free_grip(rest: Posed, side: str, spec: dict, rig: dict, head_centre: np.ndarray) -> Grip:
@@ -230,9 +227,7 @@ def _free_grip(rest: Posed, side: str, spec: dict, rig: dict, head_centre: np.nd
     a = np.asarray(spec["fingers"], float)
     a = _unit(a - p * (a @ p))
     centre = _reference(rest, spec, rig, head_centre) + np.asarray(spec["offset"], float)
-    grip = _grip(rest, side, a, p, centre - p * PALM_HALF, GRIP_ALONG, False)
-    grip.free = True
-    return grip
+    return _grip(rest, side, a, p, centre - p * PALM_HALF, GRIP_ALONG, "nothing")
 
 
 def _reference(rest: Posed, spec: dict, rig: dict, head_centre: np.ndarray) -> np.ndarray:
@@ -244,10 +239,10 @@ def _reference(rest: Posed, spec: dict, rig: dict, head_centre: np.ndarray) -> n
     return np.asarray(rig["steering_wheel"]["centre"], float)
 
 
-def _grip(rest, side, a, p, palm_target, along, on_wheel) -> Grip:
+def _grip(rest, side, a, p, palm_target, along, holds) -> Grip:
     frame = hand_frame(rest, side)
     Z = turn_to(frame, a, p)
-    return Grip(palm_target, Z @ rest.rot(f"wrist.{side}"), Z @ frame.a, along, on_wheel)
+    return Grip(palm_target, Z @ rest.rot(f"wrist.{side}"), Z @ frame.a, along, holds)
 
 
 def _arm(rest: Posed, side: str, grip: Grip) -> dict:
