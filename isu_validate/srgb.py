@@ -5,6 +5,7 @@ A leaf: imports numpy only, so ``render/`` and ``capture/`` can both import it.
 
 - ``srgb_levels`` / ``srgb_to_linear``: the curve and its inverse, not clipped;
 - ``srgb_encode``: linear light -> 8-bit codes (what the renderer writes);
+- ``linear_from_srgb8``: an 8-bit sRGB colour as a technician would match it -> a linear RGB albedo tuple;
 - ``srgb_encode_float`` / ``srgb_decode``: linear light <-> display levels 0..1 as float64, clipped
   (patch colours of the ColorChecker).
 """
@@ -37,3 +38,8 @@ def srgb_encode_float(linear):
 def srgb_decode(levels):
     """Display levels (clipped to 0..1) -> linear light, as float64."""
     return srgb_to_linear(np.clip(np.asarray(levels, dtype=float), 0.0, 1.0))
+
+
+def linear_from_srgb8(*srgb_8bit: int) -> tuple[float, ...]:
+    """An 8-bit sRGB colour (what a technician matches against a swatch) -> linear RGB floats."""
+    return tuple(float(srgb_to_linear(c / 255.0)) for c in srgb_8bit)

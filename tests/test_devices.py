@@ -52,6 +52,22 @@ def test_auto_takes_the_first_cuda_device_torch_sees(monkeypatch):
     assert device.describe() == "cuda:0 (Fake GPU)"
 
 
+def test_cuda_computes_float32_in_full_precision_and_the_cpu_leaves_torch_as_it_is(monkeypatch):
+    import torch
+    conv, matmul = torch.backends.cudnn.conv, torch.backends.cuda.matmul
+    before = conv.fp32_precision, matmul.fp32_precision
+    try:
+        conv.fp32_precision, matmul.fp32_precision = "tf32", "tf32"
+        _cuda(monkeypatch, 0)
+        _resolve("cuda")                                                          # fell back: nothing changes
+        assert conv.fp32_precision == "tf32"
+        _cuda(monkeypatch, 1)
+        assert _resolve("cuda")[0].name == "cuda:0"
+        assert conv.fp32_precision == "ieee" and matmul.fp32_precision == "ieee"
+    finally:
+        conv.fp32_precision, matmul.fp32_precision = before
+
+
 def test_cuda_absent_falls_back_with_one_line(monkeypatch):
     _cuda(monkeypatch, 0)
     device, lines = _resolve("cuda")

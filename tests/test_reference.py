@@ -11,7 +11,8 @@ from isu_validate.protocols import SUTRequest
 from isu_validate.reference.backbone import Backbone
 from isu_validate.reference.captioner import describe
 from isu_validate.reference.heads import fit_head, load_heads, save_heads
-from isu_validate.reference.training import balanced_scenes, train_reference
+from isu_validate.reference.training import balanced_scenes, train_reference, visible_label
+from isu_validate.render.outputs import channel_paths
 from isu_validate.space import load_space
 
 SPACE = load_space()
@@ -102,6 +103,35 @@ def test_held_out_accuracy_is_also_measured_at_other_presets(tmp_path, backbone)
     text = (tmp_path / "model" / "MODEL_CARD.md").read_text()
     assert "| feature | painted | n | dim | n | training accuracy |" in text
     assert "--check-preset dim:10" in text and "(preset `dim`)" in text
+
+
+class HidingPainter(PatchPainter):
+    """Paints no luggage on the back bench and says so in a render label, as the renderer does."""
+
+    def render(self, scene, out: Path):
+        hidden = scene.get("luggage_position") == "BACK"
+        super().render({**scene, "luggage": "NO"} if hidden else scene, out)
+        occluded = ["luggage", "luggage_position", "luggage_colour"] if hidden else []
+        channel_paths(out)["label"].write_text(json.dumps({"occluded": occluded}))
+
+
+def test_what_a_render_hid_from_the_camera_is_neither_learnt_nor_scored(tmp_path, backbone):
+    card = train_reference(SPACE, HidingPainter(), tmp_path / "model", tmp_path / "work", n_train=48, n_test=24,
+                           seed=3, preset="painted", backbone=backbone)
+    scenes = [SPACE.canonical(s) for s in balanced_scenes(SPACE, 24, np.random.default_rng(3 + 10_000))]
+    back = sum(s.get("luggage_position") == "BACK" for s in scenes)
+    with_luggage = sum("luggage_position" in s for s in scenes)
+    assert back > 0 and card["hidden_from_camera"]["held_out"] == {"luggage": back, "luggage_colour": back,
+                                                                   "luggage_position": back}
+    assert card["held_out"]["per_feature"]["luggage_position"]["n"] == with_luggage - back
+    assert card["held_out"]["per_feature"]["luggage"]["n"] == 24 - back
+    assert card["held_out"]["per_feature"]["tshirt_colour"]["n"] == 24
+    assert card["hidden_from_camera"]["training"]["luggage"] > 0
+    text = (tmp_path / "model" / "MODEL_CARD.md").read_text()
+    said = f"training: luggage {card['hidden_from_camera']['training']['luggage']}"
+    assert f"Hidden from the camera, so not learnt from nor scored (the render label's `occluded`): {said}" in text
+    assert f"held-out: luggage {back}" in text
+    assert visible_label({"luggage": "YES"}, tmp_path / "no-label.png") == {"luggage": "YES"}
 
 
 def test_check_preset_arguments_are_checked():

@@ -125,7 +125,9 @@ def test_accessories_sit_on_the_face_the_hair_and_the_wrist(people):
     scalp = topo["hair_i"] == topo["hair_j"]
     hair_lift[topo["hair_i"][scalp]] = topo["hair_thickness"][scalp]
     lift = np.linalg.norm(dressed["cap_co"][crown] - v[cap.i[crown]], axis=1)
-    assert (lift >= hair_lift[cap.i[crown]] + 0.002).all()
+    under = hair_lift[cap.i[crown]]
+    assert (under > 0.003).mean() > 0.5, "the bob's hair lies under most of the crown: the lift has hair to clear"
+    assert (lift >= under + 0.002).all()
     assert crown.sum() > 150
     # the watch: a band round the left forearm (the body's +X side), off its skin, and a case on it
     band = Garment.from_arrays(outfit, "band")

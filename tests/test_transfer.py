@@ -10,6 +10,7 @@ from isu_validate.cli import main
 from isu_validate.errors import InputError
 from isu_validate.realphotos import label_photos, load_label_map, read_photo_set
 from isu_validate.space import load_space
+from isu_validate.reference.model import default_model_dir
 from isu_validate.transfer.scores import Answer, balanced_accuracy, score
 
 SPACE = load_space("isu-paper")
@@ -182,7 +183,10 @@ def test_transfer_end_to_end_resumes_and_refuses_other_settings(class_set, tmp_p
     assert phone["auc"] is not None
     rates = [r["rate"] for r in phone["recall"].values()]
     assert phone["balanced_accuracy"] == pytest.approx(sum(rates) / len(rates))   # the mean of the recalls
-    assert summary["renders"]["scores"]["phone_position"]["n"] == 200   # the shipped model's held-out renders
+    card = json.loads((default_model_dir() / "model_card.json").read_text())
+    hidden = card.get("hidden_from_camera", {}).get("held_out", {}).get("phone_position", 0)
+    assert summary["renders"]["scores"]["phone_position"]["n"] == 200 - hidden   # the shipped model's held-out renders
+    assert "zero_shot" not in summary["settings"] and "zero_shot" not in summary
     assert summary["sets"]["set"]["scores"]["seat_belt"]["n"] == 4      # only c0 says the belt
     lines = [json.loads(x) for x in (out / "answers.jsonl").read_text().splitlines()]
     assert {x["set"] for x in lines} == {"set", "renders"}
@@ -195,6 +199,69 @@ def test_transfer_end_to_end_resumes_and_refuses_other_settings(class_set, tmp_p
     capsys.readouterr()
     assert main(args + ["--limit", "2"]) == 2                    # another measurement: refused, nothing written
     assert "made with other settings (limit: (default) then, 2 now)" in capsys.readouterr().err
+
+
+# ---- zero-shot: does the object read as itself to a photo-trained classifier?
+
+def test_the_zero_shot_crops_tile_the_frame_in_halves_and_thirds():
+    from isu_validate.recognition.objects import anywhere_crops
+    rgb = (np.arange(60 * 90 * 3).reshape(60, 90, 3) % 251).astype(np.uint8)
+    crops = anywhere_crops(rgb)
+    assert len(crops) == 25
+    assert [c.shape[:2] for c in crops] == [(30, 45)] * 9 + [(20, 30)] * 16
+    halves = [(y, x) for y in (0, 15, 30) for x in (0, 22, 45)]         # overlapping, corner to corner
+    thirds = [(y, x) for y in (0, 13, 27, 40) for x in (0, 20, 40, 60)]
+    for crop, (y, x), (h, w) in zip(crops, halves + thirds, [(30, 45)] * 9 + [(20, 30)] * 16, strict=True):
+        assert (crop == rgb[y:y + h, x:x + w]).all()
+    covered = np.zeros((60, 90), bool)
+    for y, x in thirds:
+        covered[y:y + 20, x:x + 30] = True
+    assert covered.all()
+
+
+def test_the_zero_shot_auc_says_which_frames_show_the_thing(tmp_path, monkeypatch):
+    from isu_validate.transfer.ask import Item
+    from isu_validate.transfer.zero_shot import zero_shot_scores
+
+    class Brightness:   # stands in for the classifier: the brighter the frame, the more "phone"
+        def __init__(self, device):
+            pass
+
+        def anywhere(self, rgb, obj):
+            assert obj == "phone"
+            return float(rgb.mean())
+
+    monkeypatch.setattr("isu_validate.recognition.objects.ObjectRecogniser", Brightness)
+    frames = {}
+    for level in (10, 20, 200, 210):
+        frames[level] = tmp_path / f"{level}.png"
+        Image.fromarray(np.full((8, 8, 3), level, np.uint8)).save(frames[level])
+
+    def items(yes, no, grey=()):
+        return ([Item(f"y{v}", frames[v], {"phone_position": "YES"}) for v in yes]
+                + [Item(f"n{v}", frames[v], {"phone_position": "NO", "seat_belt": "YES"}) for v in no])
+    out = zero_shot_scores({"shows": items((200, 210), (10, 20)), "backwards": items((10, 20), (200, 210)),
+                            "ties": items((20,), (20,)), "no negatives": items((200,), ())},
+                           SPACE, ["phone_position", "seat_belt"], "cpu")
+    assert out["shows"]["phone_position"]["auc"] == 1.0 and out["backwards"]["phone_position"]["auc"] == 0.0
+    assert out["ties"]["phone_position"]["auc"] == 0.5 and out["no negatives"]["phone_position"]["auc"] is None
+    assert out["shows"]["phone_position"]["median_positive"] == pytest.approx(205.0)
+    assert set(out["shows"]) == {"phone_position"}       # no object stands for a seat belt: not scored
+    assert zero_shot_scores({"x": items((200,), (10,))}, SPACE, ["seat_belt"], "cpu") == {}
+
+
+def test_transfer_zero_shot_scores_the_real_photos_with_the_real_classifier(class_set, tmp_path, capsys,
+                                                                           few_torch_threads):
+    out = tmp_path / "z"
+    assert main(["transfer", str(class_set / "set"), "--labels", str(class_set / "map.toml"), "--limit", "4",
+                 "--zero-shot", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "zero-shot phone anywhere (ImageNet classes, no training), set, phone_position: AUC" in printed
+    summary = json.loads((out / "summary.json").read_text())
+    row = summary["zero_shot"]["set"]["phone_position"]
+    assert row["n_positive"] == 2 and row["n_negative"] == 2 and 0.0 <= row["auc"] <= 1.0
+    assert 0.0 <= row["median_positive"] <= 1.0 and summary["settings"]["zero_shot"] is True
+    assert "Does the object read as itself? (zero-shot, no training)" in (out / "report.html").read_text()
 
 
 def test_transfer_escapes_what_the_labels_and_sut_said(tmp_path, few_torch_threads):
@@ -251,6 +318,28 @@ def test_bench_transfer_recipes_parse_and_a_model_recipe_runs(class_set, tmp_pat
     assert "shipped: model" in table and "real set" in table and "own held-out renders" in table
     row = json.loads((out / "bench.json").read_text())[0]
     assert row["scores"]["set"]["phone_position"]["n"] == 6 and row["scores"]["renders"]["phone_position"] > 0.9
+
+
+def test_a_trained_recipe_is_reused_only_for_the_rig_files_it_was_made_with(tmp_path):
+    """Editing a camera file changes what a recipe renders: its kept model is refused, not silently reused."""
+    from argparse import Namespace
+
+    from isu_validate.bench.transfer import _train, parse_recipe, recipe_settings
+    from isu_validate.paths import rigs_dir
+    rig = tmp_path / "cam.toml"
+    rig.write_text((rigs_dir() / "cameras" / "passenger-side.toml").read_text())
+    recipe, args = parse_recipe(f"side=train:camera={rig},n=4,held_out=2"), Namespace(preset="draft", n=4,
+                                                                                      held_out=2, seed=0)
+    options, made = recipe_settings(recipe, args)
+    assert options["camera"] == str(rig) and options["n"] == 4 and recipe_settings(recipe, args)[1] == made
+    assert json.loads(made)["renderer"] and json.loads(made)["camera_hash"]
+    rig.write_text(rig.read_text().replace("fx = 420.0", "fx = 400.0"))
+    assert json.loads(recipe_settings(recipe, args)[1])["camera_hash"] != json.loads(made)["camera_hash"]
+    folder = tmp_path / "side"
+    folder.mkdir()
+    (folder / "recipe.json").write_text(made)   # kept from before the rig was edited
+    with pytest.raises(InputError, match=f"rig files.*delete {folder}"):
+        _train(recipe, folder, args)
 
 
 # ---- clusters: frames of one driver are near-twins

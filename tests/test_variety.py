@@ -95,6 +95,26 @@ def test_the_jitter_is_seeded_per_scene_and_bounded():
     assert keys == [again.cache_key(s) for s in SCENES] and keys != [other_seed.cache_key(s) for s in SCENES]
 
 
+def test_a_scenes_key_follows_its_draw_not_the_wording_and_the_camera_is_drawn_once(monkeypatch):
+    variety = Variety.parse("pos=0.05,angle=5,focal=0.1", "mild", seed=3)
+    renderer = VariedRenderer(_CameraHolder(), variety)
+    keys = [renderer.cache_key(s) for s in SCENES]
+    assert len(set(keys)) == len(SCENES)
+    effects_off = VariedRenderer(_CameraHolder(), replace(variety, effects=SensorEffects()))
+    assert [effects_off.cache_key(s) for s in SCENES] != keys       # the effects decide the image too
+    monkeypatch.setattr(Variety, "describe", lambda self: {**self.spec(), "per_scene": "reworded"})
+    assert [VariedRenderer(_CameraHolder(), variety).cache_key(s) for s in SCENES] == keys
+    draws = []
+    original = CameraJitter.draw
+    monkeypatch.setattr(CameraJitter, "draw", lambda self, rig, rng: draws.append(1) or original(self, rig, rng))
+    fresh = VariedRenderer(_CameraHolder(), variety)
+    fresh.cache_key(SCENES[0])
+    camera, _ = fresh.camera_for(SCENES[0])
+    assert len(draws) == 1 and fresh.inner.used[-1].hash == camera.hash
+    fresh.camera_for(SCENES[1])
+    assert len(draws) == 2
+
+
 def test_off_means_the_renderer_itself_and_zero_means_identity():
     holder = _CameraHolder()
     assert vary(holder, Variety()) is holder and vary(holder, Variety.parse("", "none", 1)) is holder
@@ -277,7 +297,8 @@ def test_the_model_card_records_the_variety_its_sets_were_rendered_with(tmp_path
                            preset="painted", backbone=Backbone(160, 120, threads=2), variety=variety.describe())
     assert card["variety"] == variety.describe() and card["variety"]["seed"] == 3
     markdown = (tmp_path / "model" / "MODEL_CARD.md").read_text()
-    assert f"sensor effects `{variety.effects.text}`, seed 3" in markdown
+    assert f"  - sensor effects: `{variety.effects.text}` (each image" in markdown
+    assert "  - seed 3; per scene" in markdown
     assert f"--sensor-effects {variety.effects.text}`" in markdown
     train, _ = load_bank(tmp_path / "model", SPACE, "")
     assert train.meta["variety"] == variety.describe()

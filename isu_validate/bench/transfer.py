@@ -111,20 +111,40 @@ def _model(recipe: Recipe, folder: Path, args) -> tuple[Path, Path | None, str]:
     return _train(recipe, folder, args)
 
 
+def recipe_settings(recipe: Recipe, args) -> tuple[dict, str]:
+    """(a train recipe's options with the bench's defaults, what its recipe.json holds: those and ``_made_with``)."""
+    o = {"camera": "default", "cabin": "default", "space": "isu-paper", "preset": args.preset, "n": args.n,
+         "held_out": args.held_out, "seed": args.seed, "camera_jitter": None, "sensor_effects": None,
+         **recipe.options}
+    return o, json.dumps({**o, **_made_with(o)}, sort_keys=True)
+
+
+def _made_with(options: dict) -> dict:
+    """What else decides a trained recipe's renders: the renderer version and the rig files' contents."""
+    import hashlib
+
+    from capture.camera import load_camera
+
+    from ..render import RENDERER_VERSION
+    from ..render.cabin import load_cabin
+
+    cabin = json.dumps(load_cabin(options["cabin"]), sort_keys=True, default=str)
+    return {"renderer": RENDERER_VERSION, "camera_hash": load_camera(options["camera"]).hash,
+            "cabin_hash": hashlib.sha256(cabin.encode()).hexdigest()[:16]}
+
+
 def _train(recipe: Recipe, folder: Path, args) -> tuple[Path, Path, str]:
     from ..reference.training import train_reference
     from ..render import RENDERER_VERSION, open_renderer
     from ..render.variety import Variety, vary
     from ..space import load_space
 
-    o = {"camera": "default", "cabin": "default", "space": "isu-paper", "preset": args.preset, "n": args.n,
-         "held_out": args.held_out, "seed": args.seed, "camera_jitter": None, "sensor_effects": None,
-         **recipe.options}
-    model, made = folder / "model", json.dumps(o, sort_keys=True)
+    o, made = recipe_settings(recipe, args)
+    model = folder / "model"
     stored = (folder / "recipe.json").read_text() if (folder / "recipe.json").is_file() else made
-    if stored != made:
-        raise InputError(f"{folder} holds recipe {recipe.name} made with other settings "
-                         f"({stored}); choose another --out or recipe name")
+    if stored != made:   # a kept model is reused only for what it was made with: a changed rig file is another recipe
+        raise InputError(f"{folder} holds recipe {recipe.name} made with other settings, renderer or rig files "
+                         f"({stored}); choose another --out or recipe name, or delete {folder} to make it again")
     folder.mkdir(parents=True, exist_ok=True)
     write_text(folder / "recipe.json", made)
     description = f"{RENDERER_VERSION}, " + ", ".join(f"{k}={v}" for k, v in o.items())
@@ -149,7 +169,8 @@ def _measure(args, recipe: Recipe, model: Path, renders: Path | None, out: Path)
     space = json.loads((model / "heads.json").read_text()).get("space", args.space)   # the space it was trained in
     settings = TransferSettings(tuple(args.real), tuple(args.labels), "reference", {"model_dir": str(model)},
                                 space, str(renders) if renders else None, args.layout, args.skip_conflicts,
-                                parse_groups(args.groups), args.limit, seed=args.seed, device=args.device)
+                                parse_groups(args.groups), args.limit, seed=args.seed, device=args.device,
+                                zero_shot=args.zero_shot)
     print(f"bench transfer: measuring recipe {recipe.name}", file=sys.stderr)
     return measure_transfer(settings, out)
 
@@ -158,7 +179,9 @@ def _headline(summary: dict) -> dict:
     return {name: {f: {k: sc[k] for k in ("n", "balanced_accuracy", "balanced_accuracy_ci95", "auc")}
                    for f, sc in s["scores"].items()} for name, s in summary["sets"].items()} | {
         "renders": {f: sc["balanced_accuracy"] for f, sc in (summary.get("renders") or {}).get("scores", {}).items()},
-        "kid": {name: r["kid_mean"] for name, r in (summary.get("realism") or {}).items()}}
+        "kid": {name: r["kid_mean"] for name, r in (summary.get("realism") or {}).items()},
+        "zero_shot_auc": {name: {f: r["auc"] for f, r in features.items()}
+                          for name, features in (summary.get("zero_shot") or {}).items()}}
 
 
 def format_table(rows: list[dict]) -> str:
@@ -176,6 +199,9 @@ def format_table(rows: list[dict]) -> str:
         if s.get("renders"):
             cells = [f"{f} BA {_ci(sc)}" for f, sc in s["renders"]["scores"].items()]
             lines.append(f"  {'own held-out renders':<23} " + "; ".join(cells))
+        if s.get("zero_shot"):
+            from ..transfer.zero_shot import format_zero_shot
+            lines += [f"  {line}" for line in format_zero_shot(s["zero_shot"])]
     return "\n".join(lines)
 
 

@@ -62,7 +62,7 @@ def run(args) -> int:
     settings = TransferSettings(tuple(args.real), tuple(args.labels), args.sut, options, args.space,
                                 str(args.renders) if args.renders else None, args.layout, args.skip_conflicts,
                                 parse_groups(args.groups), args.limit, args.repeats, args.prompt_style, args.seed,
-                                args.device, args.sut_timeout)
+                                args.device, args.sut_timeout, args.zero_shot)
     args.interrupted = (f"interrupted; the replies so far are cached in {args.out / 'cache' / 'sut'}: run the same "
                         "command again to continue")
     if args.sut == "reference":   # the embedded SUT runs torch here; any other SUT runs elsewhere
@@ -89,6 +89,9 @@ def format_summary(summary: dict) -> str:
     for name, r in (summary.get("realism") or {}).items():
         lines.append(f"KID {name} vs renders: {r['kid_mean']:.4f} ± {r['kid_std']:.4f} (FID {r['fid']:.1f}; "
                      f"n {r['n_real']} real, {r['n_renders']} renders)")
+    if summary.get("zero_shot"):
+        from ..transfer.zero_shot import format_zero_shot
+        lines += format_zero_shot(summary["zero_shot"])
     return "\n".join(lines).lstrip("\n")
 
 

@@ -190,14 +190,11 @@ def _variety(variety: dict | None) -> list[str]:
     if not variety:
         return ["## Camera and sensor", "", "Every render is seen through the camera file's pose and lens as they are "
                 "(no camera jitter, no sensor effects).", ""]
-    return ["## Camera and sensor (variety per scene)", "",
-            f"- camera jitter: `{variety['camera_jitter'] or 'none'}` (uniform per axis: shift in metres along the "
-            "cabin's axes, turn in degrees about the camera's own, focal length relative); the labels (boxes, masks, "
-            "`up`, visibility) are the jittered camera's",
-            f"- sensor effects: `{variety['sensor_effects'] or 'none'}` (each image draws every strength between "
-            "none and its maximum; applied after rendering: exposure, white balance, vignetting, blur, noise, JPEG)",
-            f"- seed {variety['seed']}; per scene: {variety['per_scene']}; what each image drew is its `variety` in "
-            "`metadata.jsonl`", ""]
+    from ..render.variety import card_lines
+
+    lines = card_lines(variety)
+    lines[-1] += "; what each image drew is its `variety` in `metadata.jsonl`"
+    return ["## Camera and sensor (variety per scene)", "", *lines, ""]
 
 
 def _cost(costs: dict) -> str:

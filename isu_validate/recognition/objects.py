@@ -66,19 +66,44 @@ class ObjectRecogniser:
 
     def top(self, crops: list[np.ndarray]) -> list[list[tuple[str, float]]]:
         """The TOP classes with their probabilities, per RGB crop."""
-        import cv2
-
         if not crops:
             return []
+        values, index = self._probabilities(crops).topk(TOP, dim=1)
+        return [[(self.classes[i], float(v)) for v, i in zip(vs.tolist(), ix.tolist(), strict=True)]
+                for vs, ix in zip(values, index, strict=True)]
+
+    def anywhere(self, rgb: np.ndarray, obj: str) -> float:
+        """How much the frame shows ``obj`` somewhere, with no box: over ``anywhere_crops``, the largest summed
+        probability of the object's plausible classes. Needs no label, so it scores real photos and renders
+        alike: a score that separates frames with the thing from those without on photos but not on renders
+        says the rendered thing does not look like the real one to a photo-trained model."""
+        wanted = [self.classes.index(name) for name in PLAUSIBLE[obj]]
+        return float(self._probabilities(anywhere_crops(rgb))[:, wanted].sum(dim=1).max())
+
+    def _probabilities(self, crops: list[np.ndarray]):
+        import cv2
+
         torch = self.torch
         arrays = [cv2.resize(c, (INPUT, INPUT), interpolation=cv2.INTER_AREA if c.shape[0] > INPUT
                              else cv2.INTER_LINEAR) for c in crops]
         x = (torch.from_numpy(np.stack(arrays)).permute(0, 3, 1, 2).float() - INPUT_MEAN) / INPUT_STD
         with torch.inference_mode():
-            p = torch.softmax(self.model(x.to(self.device)).float(), dim=1).cpu()
-        values, index = p.topk(TOP, dim=1)
-        return [[(self.classes[i], float(v)) for v, i in zip(vs.tolist(), ix.tolist(), strict=True)]
-                for vs, ix in zip(values, index, strict=True)]
+            return torch.softmax(self.model(x.to(self.device)).float(), dim=1).cpu()
+
+
+def anywhere_crops(rgb: np.ndarray) -> list[np.ndarray]:
+    """The 25 crops ``ObjectRecogniser.anywhere`` reads: a 3x3 grid of half-size crops and a 4x4 grid of
+    third-size ones, each overlapping its neighbours (a phone in a hand is a few percent of a frame: the whole
+    frame at 224 px would shrink it to a handful of pixels)."""
+    h, w = rgb.shape[:2]
+    crops = []
+    for fraction, steps in ((1 / 2, 3), (1 / 3, 4)):
+        ch, cw = max(1, round(h * fraction)), max(1, round(w * fraction))
+        for iy in range(steps):
+            for ix in range(steps):
+                y0, x0 = round((h - ch) * iy / (steps - 1)), round((w - cw) * ix / (steps - 1))
+                crops.append(rgb[y0:y0 + ch, x0:x0 + cw])
+    return crops
 
 
 def hits(obj: str, top: list[tuple[str, float]]) -> tuple[bool, bool]:

@@ -101,10 +101,32 @@ def render_examples(space: SceneSpace, scenes: list[dict], renderer, folder: Pat
         if not (image.exists() and meta.exists() and json.loads(meta.read_text()) == wanted):
             renderer.render(canonical, image)
             meta.write_text(json.dumps(wanted))
-        examples.append(Example(image, canonical))
+        examples.append(Example(image, visible_label(canonical, image)))
         progress.update()
     progress.close()
     return examples
+
+
+def visible_label(canonical: dict, image: Path) -> dict:
+    """The scene as a training label, less the features its render hid from the camera (the render label's
+    ``occluded``: below the space's ``min_visible``), as the judge leaves them out of a verdict: a phone at the
+    far ear, out of the camera's sight, is no example of a phone. A render without a label keeps every feature."""
+    from ..render.outputs import channel_paths
+
+    label = channel_paths(image)["label"]
+    if not label.is_file():
+        return canonical
+    occluded = set(json.loads(label.read_text()).get("occluded") or ())
+    return {name: value for name, value in canonical.items() if name not in occluded}
+
+
+def hidden_counts(space: SceneSpace, scenes: list[dict], examples: list[Example]) -> dict[str, int]:
+    """How many of the scenes' features their examples leave out as hidden from the camera."""
+    counts: dict[str, int] = defaultdict(int)
+    for scene, example in zip(scenes, examples, strict=True):
+        for name in space.canonical(scene).keys() - example.scene.keys():
+            counts[name] += 1
+    return dict(sorted(counts.items()))
 
 
 def embed(backbone: Backbone, examples: list[Example]) -> np.ndarray:
@@ -175,6 +197,8 @@ def train_reference(space: SceneSpace, renderer, out: Path, workdir: Path, n_tra
             for part, scenes_seed in ((train, seed), (test, seed + 10_000))]
     heads, card = fit_and_describe(space, bank[0], bank[1], seed, {
         name: (embed(backbone, examples), [e.scene for e in examples]) for name, examples in others.items()})
+    card["hidden_from_camera"] = {"training": hidden_counts(space, train_scenes, train),
+                                  "held_out": hidden_counts(space, test_scenes, test)}
     card.update({"render_preset": preset, "renderer": renderer_version, "device": backbone.device.describe(),
                  "train_seconds": round(time.time() - start, 1), **({"variety": variety} if variety else {})})
     write_model(out, heads, card, bank)
@@ -237,6 +261,7 @@ def model_card_markdown(card: dict) -> str:
              f"render preset `{card['render_preset']}`",
              f"- Held-out set: {card['held_out_scenes']} scenes, seed {card['seed'] + 10_000}{also}",
              *_variety_lines(card.get("variety")),
+             *_hidden_lines(card.get("hidden_from_camera")),
              f"- Reproduce: `isu-validate reference train --n {card['training_scenes']} "
              f"--held-out {card['held_out_scenes']} --seed {card['seed']} --preset {card['render_preset']}{reproduce}"
              + _variety_flags(card.get("variety")) + "`",
@@ -258,12 +283,20 @@ def model_card_markdown(card: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _hidden_lines(hidden: dict | None) -> list[str]:
+    if hidden is None:
+        return []
+    said = "; ".join(f"{role.replace('_', '-')}: " + (", ".join(f"{name} {n}" for name, n in counts.items()) or "none")
+                     for role, counts in hidden.items())
+    return [f"- Hidden from the camera, so not learnt from nor scored (the render label's `occluded`): {said}"]
+
+
 def _variety_lines(variety: dict | None) -> list[str]:
     if not variety:
         return []
-    return [f"- Variety (training, held-out and checked sets alike): camera jitter "
-            f"`{variety['camera_jitter'] or 'none'}`, sensor effects `{variety['sensor_effects'] or 'none'}`, seed "
-            f"{variety['seed']}, per scene {variety['per_scene']}"]
+    from ..render.variety import card_lines
+
+    return ["- Variety (training, held-out and checked sets alike):", *("  " + line for line in card_lines(variety))]
 
 
 def _variety_flags(variety: dict | None) -> str:

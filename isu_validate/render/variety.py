@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping
 
+from ..atomic import write_json
 from ..errors import InputError
 from .camera_jitter import CameraJitter, parse_camera_jitter
 from .sensor_effects import SensorEffects, apply_to_file, parse_sensor_effects
@@ -37,13 +38,19 @@ class Variety:
     def active(self) -> bool:
         return self.jitter.active or self.effects.active
 
-    def describe(self) -> dict:
-        """For settings, cards and cache keys: the canonical specs and the seed ({} when nothing varies)."""
+    def spec(self) -> dict:
+        """What decides the draws (cache keys hash this): the canonical specs and the seed ({} when nothing
+        varies). Wording about them lives in ``describe`` only, so rewording never changes a key."""
         if not self.active:
             return {}
-        return {"camera_jitter": self.jitter.text, "sensor_effects": self.effects.text, "seed": self.seed,
-                "per_scene": "numpy Generator(SeedSequence([seed, stream, sha256(scene key)])): stream 1 the "
-                             "camera, 2 the effects"}
+        return {"camera_jitter": self.jitter.text, "sensor_effects": self.effects.text, "seed": self.seed}
+
+    def describe(self) -> dict:
+        """For settings and cards: ``spec`` and how each scene's draws follow from it."""
+        if not self.active:
+            return {}
+        return {**self.spec(), "per_scene": "numpy Generator(SeedSequence([seed, stream, sha256(scene key)])): "
+                                            "stream 1 the camera, 2 the effects"}
 
     def rng(self, scene_key: str, stream: int):
         import numpy as np
@@ -64,12 +71,17 @@ class VariedRenderer:
         self.variety = variety
         self.space = renderer.space
         self.rig = getattr(renderer, "rig", None)   # the camera file's camera: every jitter starts from it
+        self._drawn: tuple[str, Any, dict] | None = None   # (scene key, camera, draw): cache_key's, for render
 
     def camera_for(self, canonical: Mapping[str, Any]):
-        """(the scene's camera, what was drawn); the rig itself when nothing jitters."""
+        """(the scene's camera, what was drawn); the rig itself when nothing jitters. Drawn once per scene:
+        ``cache_key`` and then ``render`` of the same scene share the draw."""
         if not self.variety.jitter.active:
             return self.rig, {}
-        return self.variety.jitter.draw(self.rig, self.variety.rng(self.space.key(canonical), _JITTER_STREAM))
+        key = self.space.key(canonical)
+        if self._drawn is None or self._drawn[0] != key:
+            self._drawn = (key, *self.variety.jitter.draw(self.rig, self.variety.rng(key, _JITTER_STREAM)))
+        return self._drawn[1], self._drawn[2]
 
     def render(self, scene: Mapping[str, Any], out: Path):
         canonical = self.space.check(scene)
@@ -87,7 +99,7 @@ class VariedRenderer:
         label = result.channels.get("label")
         if label is not None and Path(label).exists():
             data = json.loads(Path(label).read_text())
-            Path(label).write_text(json.dumps({**data, "variety": {**self.variety.describe(), **drawn}}, indent=1))
+            write_json(label, {**data, "variety": {**self.variety.describe(), **drawn}}, indent=1)
         return result
 
     def cache_key(self, canonical: Mapping[str, Any]) -> str:
@@ -96,11 +108,21 @@ class VariedRenderer:
         if self.variety.jitter.active:
             self.inner.use_camera(camera)
         inner = self.inner.cache_key(canonical) if hasattr(self.inner, "cache_key") else self.space.key(canonical)
-        blob = json.dumps([inner, self.variety.describe()], sort_keys=True)
+        blob = json.dumps([inner, self.variety.spec()], sort_keys=True)
         return hashlib.sha256(blob.encode()).hexdigest()
 
     def close(self) -> None:
         self.inner.close()
+
+
+def card_lines(described: dict) -> list[str]:
+    """The variety of a set, for dataset and model cards alike (``Variety.describe()``): one bullet each."""
+    return [f"- camera jitter: `{described['camera_jitter'] or 'none'}` (uniform per axis: shift in metres along "
+            "the cabin's axes, turn in degrees about the camera's own, focal length relative); the labels (boxes, "
+            "masks, `up`, visibility) are the jittered camera's",
+            f"- sensor effects: `{described['sensor_effects'] or 'none'}` (each image draws every strength between "
+            "none and its maximum; applied after rendering: exposure, white balance, vignetting, blur, noise, JPEG)",
+            f"- seed {described['seed']}; per scene: {described['per_scene']}"]
 
 
 def vary(renderer, variety: Variety):

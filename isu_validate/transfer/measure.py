@@ -46,9 +46,12 @@ class TransferSettings:
     seed: int = 0                             # the bootstrap's and KID's subsets
     device: str = "auto"
     sut_timeout_s: float = 60.0
+    zero_shot: bool = False                   # also the object score with no training (``zero_shot.py``)
 
     def identity(self, label_digests: list[str], sut_fingerprint: str) -> dict:
         out = {k: v for k, v in asdict(self).items() if k not in ("device", "sut_timeout_s", "labels")}
+        if not self.zero_shot:   # off: the identity of a measurement made before the option existed
+            del out["zero_shot"]
         out["real"] = [str(Path(r).resolve()) for r in self.real]
         out["renders"] = str(Path(self.renders).resolve()) if self.renders else None
         out["groups"] = {k: str(Path(v).resolve()) for k, v in self.groups.items()}
@@ -90,6 +93,8 @@ def measure_transfer(settings: TransferSettings, out: Path, overwrite: bool = Fa
                                  "scores": _scores(answered[s.name], space, features, settings.seed)} for s in sets},
                "renders": ({**about, "scores": _scores(beside, space, features, settings.seed)} if about else None)}
     summary["realism"] = _realism(settings, sets, stream)
+    if settings.zero_shot:
+        summary["zero_shot"] = _zero_shot(settings, space, sets, features)
     summary["seconds"] = round(time.perf_counter() - started, 1)
     _write(out, summary, answered, beside, space)
     return summary
@@ -156,10 +161,11 @@ def _renders(settings: TransferSettings, space: SceneSpace, features: list[str],
     from ..dataset.folder import DatasetDir
     from .renders import dataset_items, held_out_records
 
-    if settings.renders and DatasetDir(Path(settings.renders)).is_dataset():
-        items = dataset_items(Path(settings.renders), space, features)
+    dataset = DatasetDir(Path(settings.renders)) if settings.renders else None
+    if dataset is not None and dataset.is_dataset():
+        items = dataset_items(dataset, space, features)
         records = ask_all(sut, space, items, features, "renders", style=settings.prompt_style, stream=stream)
-        info = DatasetDir(Path(settings.renders)).info()
+        info = dataset.info()
         return records, {"source": f"dataset {settings.renders}", "renderer": info.get("renderer"),
                          "preset": (info.get("preset") or {}).get("name"), "scenes": len(items)}
     if settings.sut == "reference":
@@ -203,6 +209,26 @@ def _realism(settings: TransferSettings, sets: list[RealSet], stream) -> dict | 
                        "n_real": result.n_a, "n_renders": result.n_b, "settings": result.settings,
                        "warnings": result.warnings}
     return out
+
+
+def _zero_shot(settings: TransferSettings, space: SceneSpace, sets: list[RealSet], features: list[str]) -> dict:
+    """The zero-shot object score's AUC on each real set and on the renders whose truth is known."""
+    import sys
+
+    from ..dataset.folder import DatasetDir
+    from .renders import dataset_items, labelled_frames
+    from .zero_shot import zero_shot_scores
+
+    groups = {s.name: s.items for s in sets}
+    if settings.renders:
+        folder = Path(settings.renders)
+        dataset = DatasetDir(folder)
+        rendered = dataset_items(dataset, space, features) if dataset.is_dataset() else labelled_frames(
+            folder, space, features)
+        if rendered:
+            groups["renders"] = rendered
+    return zero_shot_scores(groups, space, features, settings.device,
+                            progress=lambda name, n: print(f"zero-shot: {name} ({n} frames)", file=sys.stderr))
 
 
 def _write(out: Path, summary: dict, answered: dict, beside: list[dict], space: SceneSpace) -> None:

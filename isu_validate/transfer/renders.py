@@ -20,19 +20,40 @@ from ..space import SceneSpace
 from .ask import Item
 
 
-def dataset_items(folder: Path, space: SceneSpace, features: list[str]) -> list[Item]:
+def dataset_items(dataset: DatasetDir, space: SceneSpace, features: list[str]) -> list[Item]:
     """The dataset's renders (style copies left out) with their true answers for ``features``."""
-    dataset = DatasetDir(folder)
+    folder = dataset.path
     items = []
     for slot, entry in sorted(dataset.entries().items()):
         if entry.get("status") != "ok":
             continue
-        truth = {q.key: q.truth for q in space.questions(entry["scene"]) if q.key in features}
+        hidden = set(entry.get("occluded") or ())     # what the frame hid is not asked, as the judge does
+        truth = {q.key: q.truth for q in space.questions(entry["scene"]) if q.key in features and q.key not in hidden}
         for f in entry["files"]:
             if f.get("variant") == "render" and truth:
                 items.append(Item(f"{slot:06d}", folder / f["file_name"], truth))
     if not items:
         raise InputError(f"dataset {folder} holds no finished render that answers {', '.join(features)}")
+    return items
+
+
+def labelled_frames(folder: Path, space: SceneSpace, features: list[str]) -> list[Item]:
+    """The frames of a folder of renders that carry their render label (``render --random``, a reference's
+    training sets), with the true answers for ``features`` less what the frame hid (the label's ``occluded``)."""
+    import json
+
+    from ..render.outputs import channel_paths
+
+    items = []
+    for image in render_images(folder):
+        label = channel_paths(image)["label"]
+        if not label.is_file():
+            continue
+        data = json.loads(label.read_text())
+        hidden = set(data.get("occluded") or ())
+        truth = {q.key: q.truth for q in space.questions(data["scene"]) if q.key in features and q.key not in hidden}
+        if truth:
+            items.append(Item(image.stem, image, truth))
     return items
 
 

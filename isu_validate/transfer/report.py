@@ -14,7 +14,7 @@ GALLERY = 24     # wrong answers shown per set and feature
 
 
 def write_report(path: Path, summary: dict, answered: dict[str, list[dict]], space) -> None:
-    sections = [_overview(summary), _realism(summary)]
+    sections = [_overview(summary), _realism(summary), _zero_shot(summary)]
     for feature in summary["features"]:
         sections.append(_feature(summary, feature, space))
         positive = positive_class(space.features[feature].options)
@@ -61,6 +61,20 @@ def _realism(summary: dict) -> str:
     warnings = sorted({w for r in summary["realism"].values() for w in r["warnings"]})
     return section("Distance to the renders (Inception features)", table(list(rows[0]), rows),
                    *[paragraph(w) for w in warnings], anchor="realism")
+
+
+def _zero_shot(summary: dict) -> str:
+    if not summary.get("zero_shot"):
+        return ""
+    rows = [{"frames": name, "feature": feature, "object": r["object"], "AUC": fmt(r["auc"]),
+             "with": r["n_positive"], "without": r["n_negative"], "median score with": fmt(r["median_positive"]),
+             "median score without": fmt(r["median_negative"])}
+            for name, features in summary["zero_shot"].items() for feature, r in features.items()]
+    return section("Does the object read as itself? (zero-shot, no training)", table(list(rows[0]), rows),
+                   paragraph("The largest summed ImageNet probability of the object's classes over 25 crops of each "
+                             "frame, against its label: an AUC the real photos reach and the renders do not says the "
+                             "rendered object does not look like the real one to a photo-trained model."),
+                   anchor="zero-shot")
 
 
 def _feature(summary: dict, feature: str, space) -> str:

@@ -30,8 +30,9 @@ def frames_of(source: Path) -> tuple[str, list[Frame]]:
         raise InputNotFound(f"{source} does not exist: give a run, a dataset, a pairs folder or a folder of frames")
     if RunDir(source).is_run():
         return "run", _run_frames(RunDir(source))
-    if DatasetDir(source).is_dataset():
-        return "dataset", _dataset_frames(DatasetDir(source))
+    dataset = DatasetDir(source)
+    if dataset.is_dataset():
+        return "dataset", _dataset_frames(dataset)
     if source.is_dir() and PairsDir.looks_like(source):
         return "pairs", _pairs_frames(PairsDir(source))
     if source.is_dir():

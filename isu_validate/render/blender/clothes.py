@@ -13,23 +13,19 @@ import math
 import bpy
 import numpy as np
 
-from ...srgb import srgb_to_linear
+from ...srgb import linear_from_srgb8 as srgb8   # colours written as the 8-bit sRGB a technician matches
 from . import mesh as M
 from . import nodes as N
 
 
-def _linear(*srgb_8bit):
-    return tuple(float(srgb_to_linear(c / 255.0)) for c in srgb_8bit)
-
-
 TOP = {"BLACK": (0.012, 0.012, 0.013), "WHITE": (0.80, 0.80, 0.78)}   # as the painted T-shirt was
-PRINT = {"RED": _linear(170, 30, 36), "NAVY": _linear(30, 40, 80), "GREY": _linear(120, 120, 122),
-         "GREEN": _linear(40, 110, 60), "YELLOW": _linear(220, 180, 40)}
-JACKET = {"BLACK": _linear(24, 24, 26), "NAVY": _linear(32, 40, 66), "BROWN": _linear(92, 62, 40),
-          "OLIVE": _linear(82, 86, 52), "GREY": _linear(110, 110, 112), "BEIGE": _linear(190, 170, 135)}
-TROUSERS = {"NAVY": (0.02, 0.03, 0.07), "BLACK": _linear(26, 26, 28), "GREY": _linear(96, 96, 100),
-            "DENIM": _linear(60, 80, 120), "BEIGE": _linear(186, 164, 126)}
-CAP = _linear(44, 62, 112)
+PRINT = {"RED": srgb8(170, 30, 36), "NAVY": srgb8(30, 40, 80), "GREY": srgb8(120, 120, 122),
+         "GREEN": srgb8(40, 110, 60), "YELLOW": srgb8(220, 180, 40)}
+JACKET = {"BLACK": srgb8(24, 24, 26), "NAVY": srgb8(32, 40, 66), "BROWN": srgb8(92, 62, 40),
+          "OLIVE": srgb8(82, 86, 52), "GREY": srgb8(110, 110, 112), "BEIGE": srgb8(190, 170, 135)}
+TROUSERS = {"NAVY": (0.02, 0.03, 0.07), "BLACK": srgb8(26, 26, 28), "GREY": srgb8(96, 96, 100),
+            "DENIM": srgb8(60, 80, 120), "BEIGE": srgb8(186, 164, 126)}
+CAP = srgb8(44, 62, 112)
 _PRINTS = ("STRIPES", "CHECK", "LOGO")
 # rest-body coordinates (m, the hips' joint at the origin, the body facing -Y) of the chest print's middle
 # and the shirt's button step
@@ -61,11 +57,11 @@ class Outfit:
     def apply(self, outfit: str, dressed: str, f: dict) -> dict:
         """Show the outfit on the posed body; returns the dressed arrays (the belt lies on the clothes)."""
         if outfit not in self.built:
-            self.built[outfit] = self._build(_load(outfit))
+            self.built[outfit] = self._build(M.load_arrays(outfit))
         self.hide()
         objects = self.built[outfit]
         if dressed != self.dressed_path:     # the same posed body again (another light, colour...): no reload
-            self.data = _load(dressed)
+            self.data = M.load_arrays(dressed)
         data = self.data
         if dressed != self.dressed_path or outfit != self.current:
             for part, obj in objects.items():
@@ -92,16 +88,16 @@ class Outfit:
 
     def _colour(self, f: dict) -> None:
         top = self.fabric["top"]
-        _set(top, "colour_base", TOP[f["tshirt_colour"]])
-        _set(top, "colour_print", PRINT[f.get("driver_print_colour", "NAVY")])
+        N.set_rgb(top, "colour_base", TOP[f["tshirt_colour"]])
+        N.set_rgb(top, "colour_print", PRINT[f.get("driver_print_colour", "NAVY")])
         for kind in _PRINTS:
             top.node_tree.nodes[f"print_{kind.lower()}"].outputs[0].default_value = float(
                 f.get("driver_top_print", "PLAIN") == kind)
         top.node_tree.nodes["buttons"].outputs[0].default_value = float(f.get("driver_top") == "SHIRT")
         top.node_tree.nodes["hoodie"].outputs[0].default_value = float(f.get("driver_top") == "HOODIE")
-        _set(self.fabric["outer"], "colour_base", JACKET[f.get("driver_jacket_colour", "BLACK")])
-        _set(self.fabric["trousers"], "colour_base", TROUSERS[f.get("driver_trousers_colour", "NAVY")])
-        _set(self.fabric["cap"], "colour_base", CAP)
+        N.set_rgb(self.fabric["outer"], "colour_base", JACKET[f.get("driver_jacket_colour", "BLACK")])
+        N.set_rgb(self.fabric["trousers"], "colour_base", TROUSERS[f.get("driver_trousers_colour", "NAVY")])
+        N.set_rgb(self.fabric["cap"], "colour_base", CAP)
 
     def _build(self, outfit: dict) -> dict[str, bpy.types.Object]:
         objects = {}
@@ -131,15 +127,6 @@ class Outfit:
         obj.hide_render = True
         self.coll.objects.link(obj)
         return obj
-
-
-def _load(path: str) -> dict:
-    with np.load(path, allow_pickle=False) as data:
-        return {k: data[k] for k in data.files}
-
-
-def _set(mat, node: str, colour) -> None:
-    mat.node_tree.nodes[node].outputs[0].default_value = (*colour, 1.0)
 
 
 def _switch(nodes, name: str):

@@ -67,6 +67,11 @@ def rgb(nodes, name: str, colour):
     return node.outputs[0]
 
 
+def set_rgb(material, name: str, colour) -> None:
+    """Set the named RGB node (``rgb``) of a material to a linear colour."""
+    material.node_tree.nodes[name].outputs[0].default_value = (*colour, 1.0)
+
+
 def value(nodes, number: float):
     node = nodes.new("ShaderNodeValue")
     node.outputs[0].default_value = number

@@ -19,11 +19,6 @@ from .people_look import Look
 BELT = (0.10, 0.10, 0.11)
 
 
-def _load(path: str) -> dict:
-    with np.load(path, allow_pickle=False) as data:
-        return {k: data[k] for k in data.files}
-
-
 class Person:
     """One anny body: built from a topology file once, re-posed from state files."""
 
@@ -43,11 +38,11 @@ class Person:
     def set(self, topology: str, state: str) -> dict:
         """Show this person in a state; returns the state's arrays (belt, phone...)."""
         if topology != self.topology_path:
-            self._build(_load(topology))
+            self._build(M.load_arrays(topology))
             self.topology_path = topology
             self.state_path = None
         if state != self.state_path:
-            data = self.state = _load(state)
+            data = self.state = M.load_arrays(state)
             for part, index in self.maps.items():
                 source = data[part] if part in ("hair", "locks") else data["vertices"][index]
                 mesh = self.parts[part].data

@@ -11,25 +11,21 @@ from __future__ import annotations
 
 import bpy
 
-from ...srgb import srgb_to_linear
+from ...srgb import linear_from_srgb8 as srgb8   # colours written as the 8-bit sRGB a technician matches
 from . import nodes as N
 
 
-def _linear(*srgb_8bit):
-    return tuple(float(srgb_to_linear(c / 255.0)) for c in srgb_8bit)
-
-
-SKIN_TONES = {"LIGHT": _linear(214, 170, 145), "MEDIUM": _linear(190, 135, 100),
-              "BROWN": _linear(140, 90, 62), "DARK": _linear(80, 52, 38)}
-HAIR_COLOURS = {"BLACK": _linear(26, 22, 20), "BROWN": _linear(66, 44, 30), "BLONDE": _linear(176, 140, 94),
-                "RED": _linear(122, 54, 30), "GREY": _linear(128, 126, 124)}
+SKIN_TONES = {"LIGHT": srgb8(214, 170, 145), "MEDIUM": srgb8(190, 135, 100),
+              "BROWN": srgb8(140, 90, 62), "DARK": srgb8(80, 52, 38)}
+HAIR_COLOURS = {"BLACK": srgb8(26, 22, 20), "BROWN": srgb8(66, 44, 30), "BLONDE": srgb8(176, 140, 94),
+                "RED": srgb8(122, 54, 30), "GREY": srgb8(128, 126, 124)}
 # iris colour by hair colour (the commonest pairing; eyes are not a scene feature)
-IRIS = {"BLACK": _linear(48, 30, 20), "BROWN": _linear(70, 44, 26), "BLONDE": _linear(80, 110, 140),
-        "RED": _linear(86, 96, 60), "GREY": _linear(96, 108, 120)}
-BROW_DARK, BROW_DARKENING = _linear(34, 24, 18), 0.6
+IRIS = {"BLACK": srgb8(48, 30, 20), "BROWN": srgb8(70, 44, 26), "BLONDE": srgb8(80, 110, 140),
+        "RED": srgb8(86, 96, 60), "GREY": srgb8(96, 108, 120)}
+BROW_DARK, BROW_DARKENING = srgb8(34, 24, 18), 0.6
 SHIRT = {"BLACK": (0.012, 0.012, 0.013), "WHITE": (0.80, 0.80, 0.78)}
-SCLERA = _linear(226, 216, 208)
-TEETH = _linear(214, 204, 184)
+SCLERA = srgb8(226, 216, 208)
+TEETH = srgb8(214, 204, 184)
 MOUTH = (0.06, 0.01, 0.01)
 LIPS = (0.30, 0.10, 0.085)
 # garments drawn where their per-vertex field (render/people/regions.py) is positive, in this order
@@ -58,16 +54,12 @@ class Look:
                 "hair": self.hair}[name]
 
     def set(self, skin: str, hair: str, shirt: str | None) -> None:
-        _set_rgb(self.body, "colour_skin", SKIN_TONES[skin])
+        N.set_rgb(self.body, "colour_skin", SKIN_TONES[skin])
         for mat in (self.body, self.hair):
-            _set_rgb(mat, "colour_hair", HAIR_COLOURS[hair])
-        _set_rgb(self.iris, "colour_iris", IRIS[hair])
+            N.set_rgb(mat, "colour_hair", HAIR_COLOURS[hair])
+        N.set_rgb(self.iris, "colour_iris", IRIS[hair])
         if shirt is not None:
-            _set_rgb(self.body, "colour_shirt", SHIRT[shirt])
-
-
-def _set_rgb(mat, node: str, colour) -> None:
-    mat.node_tree.nodes[node].outputs[0].default_value = (*colour, 1.0)
+            N.set_rgb(self.body, "colour_shirt", SHIRT[shirt])
 
 
 # ---------------------------------------------------------------------- materials
