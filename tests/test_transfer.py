@@ -252,14 +252,18 @@ def test_the_zero_shot_auc_says_which_frames_show_the_thing(tmp_path, monkeypatc
 
 def test_transfer_zero_shot_scores_the_real_photos_with_the_real_classifier(class_set, tmp_path, capsys,
                                                                            few_torch_threads):
+    import shutil
+    shutil.copytree(class_set / "set", tmp_path / "set")
+    (tmp_path / "set" / "c1" / "broken.jpg").write_bytes(b"\xff\xd8 not a jpeg")   # left out and counted
     out = tmp_path / "z"
-    assert main(["transfer", str(class_set / "set"), "--labels", str(class_set / "map.toml"), "--limit", "4",
-                 "--zero-shot", "--out", str(out)]) == 0
+    assert main(["transfer", str(tmp_path / "set"), "--labels", str(class_set / "map.toml"), "--zero-shot",
+                 "--out", str(out)]) == 0
     printed = capsys.readouterr().out
     assert "zero-shot phone anywhere (ImageNet classes, no training), set, phone_position: AUC" in printed
+    assert "(n 3 with, 3 without, 1 unreadable)" in printed
     summary = json.loads((out / "summary.json").read_text())
     row = summary["zero_shot"]["set"]["phone_position"]
-    assert row["n_positive"] == 2 and row["n_negative"] == 2 and 0.0 <= row["auc"] <= 1.0
+    assert (row["n_positive"], row["n_negative"], row["unreadable"]) == (3, 3, 1) and 0.0 <= row["auc"] <= 1.0
     assert 0.0 <= row["median_positive"] <= 1.0 and summary["settings"]["zero_shot"] is True
     assert "Does the object read as itself? (zero-shot, no training)" in (out / "report.html").read_text()
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import InputError
 from ..space import SceneSpace
 from .ask import Item
 from .scores import positive_class
@@ -26,8 +27,9 @@ def zero_shot_features(features: list[str]) -> dict[str, str]:
 
 def zero_shot_scores(groups: dict[str, list[Item]], space: SceneSpace, features: list[str], device: str,
                      progress=None) -> dict:
-    """{group (a real set, or "renders"): {feature: {object, auc, n_positive, n_negative, median_positive,
-    median_negative}}} for the features ``ZERO_SHOT`` knows; a group without both answers gets auc None."""
+    """{group (a real set, or "renders"): {feature: {object, auc, n_positive, n_negative, unreadable,
+    median_positive, median_negative}}} for the features ``ZERO_SHOT`` knows; a group without both answers gets
+    auc None; a frame that cannot be read is counted in ``unreadable`` and left out."""
     from ..devices import resolve_torch_device
     from ..recognition.objects import ObjectRecogniser
     from ..recognition.tally import auc
@@ -42,14 +44,18 @@ def zero_shot_scores(groups: dict[str, list[Item]], space: SceneSpace, features:
         out[name] = {}
         for feature, obj in wanted.items():
             positive = positive_class(space.features[feature].options)
-            labelled = [item for item in items if feature in item.truth]
-            scores = [recogniser.anywhere(read_rgb(item.image), obj) for item in labelled]
+            scored, unreadable = [], 0
+            for item in (item for item in items if feature in item.truth):
+                try:
+                    scored.append((recogniser.anywhere(read_rgb(item.image), obj), item.truth[feature] == positive))
+                except InputError:   # an unreadable photo is left out and counted, as transfer's SUT side does
+                    unreadable += 1
             if progress:
-                progress(name, len(labelled))
-            pos = [s for s, item in zip(scores, labelled, strict=True) if item.truth[feature] == positive]
-            neg = [s for s, item in zip(scores, labelled, strict=True) if item.truth[feature] != positive]
+                progress(name, len(scored))
+            pos = [s for s, with_it in scored if with_it]
+            neg = [s for s, with_it in scored if not with_it]
             out[name][feature] = {"object": obj, "auc": auc(pos, neg), "n_positive": len(pos),
-                                  "n_negative": len(neg), "median_positive": _median(pos),
+                                  "n_negative": len(neg), "unreadable": unreadable, "median_positive": _median(pos),
                                   "median_negative": _median(neg)}
     return out
 
@@ -65,5 +71,6 @@ def format_zero_shot(zero_shot: dict) -> list[str]:
         for feature, r in features.items():
             value = "-" if r["auc"] is None else f"{r['auc']:.2f}"
             lines.append(f"zero-shot {r['object']} anywhere (ImageNet classes, no training), {name}, {feature}: "
-                         f"AUC {value} (n {r['n_positive']} with, {r['n_negative']} without)")
+                         f"AUC {value} (n {r['n_positive']} with, {r['n_negative']} without"
+                         + (f", {r['unreadable']} unreadable)" if r.get("unreadable") else ")"))
     return lines
