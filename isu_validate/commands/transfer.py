@@ -36,7 +36,8 @@ def register(sub) -> None:
     p.add_argument("--model", type=Path, help="a reference ISU model folder (`reference train --out`): "
                                               "the same as --sut-option model_dir=DIR")
     p.add_argument("--renders", type=Path, help="renders beside the real photos: a dataset (`isu-validate dataset "
-                                                "--out`: asked too, and KID/FID) or a folder of renders (KID/FID)")
+                                                "--out`: asked too, and KID/FID) or a folder of renders (KID/FID; "
+                                                "with their .label.json also --zero-shot)")
     p.add_argument("--repeats", type=int, default=1, help="SUT queries per photo, per-feature majority (default 1)")
     p.add_argument("--prompt-style", choices=("paper", "compact"), help="VQA prompt wording (default paper)")
     p.add_argument("--sut-timeout", type=float, default=60.0, help="seconds per SUT request (default 60)")
