@@ -112,12 +112,10 @@ def visible_label(canonical: dict, image: Path) -> dict:
     ``occluded``: below the space's ``min_visible``), as the judge leaves them out of a verdict: a phone at the
     far ear, out of the camera's sight, is no example of a phone. A render without a label keeps every feature."""
     from ..render.outputs import channel_paths
+    from ..render.visibility import without_hidden
 
     label = channel_paths(image)["label"]
-    if not label.is_file():
-        return canonical
-    occluded = set(json.loads(label.read_text()).get("occluded") or ())
-    return {name: value for name, value in canonical.items() if name not in occluded}
+    return without_hidden(canonical, json.loads(label.read_text())) if label.is_file() else canonical
 
 
 def hidden_counts(space: SceneSpace, scenes: list[dict], examples: list[Example]) -> dict[str, int]:

@@ -97,3 +97,10 @@ def feature_visibility(space: SceneSpace, canonical: Mapping, parts: Mapping[str
         if shares[q.key] < min_visible.get(q.key, DEFAULT_MIN_VISIBLE):
             occluded.append(q.key)
     return shares, occluded
+
+
+def without_hidden(scene: Mapping, label: Mapping) -> dict:
+    """``scene`` less the features its frame hid (a render label's or a dataset entry's ``occluded``): what a
+    frame can teach or be asked, as the judge leaves hidden features out of a verdict."""
+    hidden = set(label.get("occluded") or ())
+    return {name: value for name, value in scene.items() if name not in hidden}

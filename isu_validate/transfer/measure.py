@@ -83,7 +83,8 @@ def measure_transfer(settings: TransferSettings, out: Path, overwrite: bool = Fa
         write_json(out / SUMMARY, {"format": FORMAT, "complete": False}, indent=1)
         answered = {s.name: ask_all(sut, space, s.items, features, s.name, style=settings.prompt_style,
                                     stream=stream) for s in sets}
-        beside, about = _renders(settings, space, features, sut, stream)
+        rendered = _render_items(settings, space, features)
+        beside, about = _renders(settings, space, features, sut, stream, rendered)
     summary = {"format": FORMAT, "complete": True, "settings": identity,
                "sut": {"spec": settings.sut, "options": settings.sut_options,
                        "version": sut_version(settings.sut, sut.adapter)["label"],
@@ -94,7 +95,7 @@ def measure_transfer(settings: TransferSettings, out: Path, overwrite: bool = Fa
                "renders": ({**about, "scores": _scores(beside, space, features, settings.seed)} if about else None)}
     summary["realism"] = _realism(settings, sets, stream)
     if settings.zero_shot:
-        summary["zero_shot"] = _zero_shot(settings, space, sets, features)
+        summary["zero_shot"] = _zero_shot(settings, space, sets, features, rendered)
     summary["seconds"] = round(time.perf_counter() - started, 1)
     _write(out, summary, answered, beside, space)
     return summary
@@ -156,14 +157,26 @@ def _digest(s: RealSet) -> str:
     return s.labelled.source["label_map_digest"]
 
 
-def _renders(settings: TransferSettings, space: SceneSpace, features: list[str], sut, stream):
-    """(records, what they were) of the SUT on renders: a dataset's, else a reference model's own held-out."""
+def _render_items(settings: TransferSettings, space: SceneSpace, features: list[str]):
+    """(the render dataset or None, the renders whose truth is known): a dataset's, or a folder of frames with
+    their labels; read once for the SUT and the zero-shot score."""
     from ..dataset.folder import DatasetDir
-    from .renders import dataset_items, held_out_records
+    from .renders import dataset_items, labelled_frames
 
-    dataset = DatasetDir(Path(settings.renders)) if settings.renders else None
-    if dataset is not None and dataset.is_dataset():
-        items = dataset_items(dataset, space, features)
+    if not settings.renders:
+        return None, []
+    dataset = DatasetDir(Path(settings.renders))
+    if dataset.is_dataset():
+        return dataset, dataset_items(dataset, space, features)
+    return None, labelled_frames(Path(settings.renders), space, features) if settings.zero_shot else []
+
+
+def _renders(settings: TransferSettings, space: SceneSpace, features: list[str], sut, stream, rendered):
+    """(records, what they were) of the SUT on renders: a dataset's, else a reference model's own held-out."""
+    from .renders import held_out_records
+
+    dataset, items = rendered
+    if dataset is not None:
         records = ask_all(sut, space, items, features, "renders", style=settings.prompt_style, stream=stream)
         info = dataset.info()
         return records, {"source": f"dataset {settings.renders}", "renderer": info.get("renderer"),
@@ -211,22 +224,16 @@ def _realism(settings: TransferSettings, sets: list[RealSet], stream) -> dict | 
     return out
 
 
-def _zero_shot(settings: TransferSettings, space: SceneSpace, sets: list[RealSet], features: list[str]) -> dict:
+def _zero_shot(settings: TransferSettings, space: SceneSpace, sets: list[RealSet], features: list[str],
+               rendered) -> dict:
     """The zero-shot object score's AUC on each real set and on the renders whose truth is known."""
     import sys
 
-    from ..dataset.folder import DatasetDir
-    from .renders import dataset_items, labelled_frames
     from .zero_shot import zero_shot_scores
 
     groups = {s.name: s.items for s in sets}
-    if settings.renders:
-        folder = Path(settings.renders)
-        dataset = DatasetDir(folder)
-        rendered = dataset_items(dataset, space, features) if dataset.is_dataset() else labelled_frames(
-            folder, space, features)
-        if rendered:
-            groups["renders"] = rendered
+    if rendered[1]:
+        groups["renders"] = rendered[1]
     return zero_shot_scores(groups, space, features, settings.device,
                             progress=lambda name, n: print(f"zero-shot: {name} ({n} frames)", file=sys.stderr))
 

@@ -16,6 +16,7 @@ import numpy as np
 
 from ..dataset.folder import DatasetDir
 from ..errors import InputError, InputNotFound
+from ..render.visibility import without_hidden
 from ..space import SceneSpace
 from .ask import Item
 
@@ -27,8 +28,8 @@ def dataset_items(dataset: DatasetDir, space: SceneSpace, features: list[str]) -
     for slot, entry in sorted(dataset.entries().items()):
         if entry.get("status") != "ok":
             continue
-        hidden = set(entry.get("occluded") or ())     # what the frame hid is not asked, as the judge does
-        truth = {q.key: q.truth for q in space.questions(entry["scene"]) if q.key in features and q.key not in hidden}
+        seen = without_hidden(entry["scene"], entry)     # what the frame hid is not asked, as the judge does
+        truth = {q.key: q.truth for q in space.questions(entry["scene"]) if q.key in features and q.key in seen}
         for f in entry["files"]:
             if f.get("variant") == "render" and truth:
                 items.append(Item(f"{slot:06d}", folder / f["file_name"], truth))
@@ -50,8 +51,8 @@ def labelled_frames(folder: Path, space: SceneSpace, features: list[str]) -> lis
         if not label.is_file():
             continue
         data = json.loads(label.read_text())
-        hidden = set(data.get("occluded") or ())
-        truth = {q.key: q.truth for q in space.questions(data["scene"]) if q.key in features and q.key not in hidden}
+        seen = without_hidden(data["scene"], data)
+        truth = {q.key: q.truth for q in space.questions(data["scene"]) if q.key in features and q.key in seen}
         if truth:
             items.append(Item(image.stem, image, truth))
     return items
