@@ -244,7 +244,7 @@ def test_eyes_teeth_and_hair_styles_are_where_a_face_has_them(people, model):
     assert people_module.hair_style_of({"driver_hair_style": "BY_GENDER"}, "male") == "short"
 
 
-@pytest.mark.parametrize("hands, phone", [("LAP", "NONE"), ("HAIR", "NONE"), ("LAP", "P3")])
+@pytest.mark.parametrize("hands, phone", [("LAP", "NONE"), ("HAIR", "NONE"), ("LAP", "P3"), ("DRINK", "NONE")])
 def test_a_free_hand_leaves_the_wheel_for_its_rig_position_and_a_phone_in_that_hand_wins(people, hands, phone):
     """isu-diverse's driver_hands: one hand off the wheel at the rig's point, the other still on the rim, the
     body clear of seat and wheel; a phone held in the same hand takes the hand (LAP + P3: reading)."""
@@ -261,12 +261,40 @@ def test_a_free_hand_leaves_the_wheel_for_its_rig_position_and_a_phone_in_that_h
     assert clear[other] < 0.006, f"{hands}: the {other} hand left the wheel ({clear})"
     if phone == "NONE":
         assert "phone_centre" not in state
+        assert ("can_centre" in state) == (spec.get("holds") == "can"), hands
         if spec["relative_to"] == "head":   # the palm at the rig's point (a few cm: the hand's own thickness)
             target = state["head_centre"] + np.asarray(spec["offset"])
             v = state["vertices"][topology["hands"].astype(bool)]
             assert np.linalg.norm(v - target, axis=1).min() < 0.03, hands
     else:
         assert m["phone_to_palm"] < 0.016 and m["phone_front_touch"] >= 20, (hands, phone, m)
+
+
+@pytest.mark.parametrize("gender, height, weight", [("MALE", "H2", "W2"), ("FEMALE", "H1", "W1"), ("MALE", "H3", "W3")])
+def test_a_can_held_to_drink_lies_in_the_closed_hand_its_top_at_the_lips(people, gender, height, weight):
+    """isu-diverse's driver_hands DRINK: the can's body in the palm with the fingers round it (the skin may press
+    a few mm into it, as skin does), its top tipped back to the mouth, touching the face without cutting into it."""
+    state = _load(people.driver_state(gender, height, weight, "SERIOUS", "NONE", None, "DRINK"))
+    topology = _load(people.topology("male" if gender == "MALE" else "female"))
+    m = driver_measures(state, topology, people.cabin)
+    assert -0.008 < m["can_clear_hand"] < 0.0 and m["can_touch"] >= 100, m
+    assert -0.002 < m["can_clear_body"] < 0.015, f"the can cuts into or stands off the face: {m}"
+    axis = state["can_rotation"][:, 2]
+    assert axis[2] > 0.5 and axis[0] < -0.3, f"the can's top is not tipped back towards the face: {axis}"
+    np.testing.assert_allclose(state["can_rotation"].T @ state["can_rotation"], np.eye(3), atol=1e-5)
+
+
+def test_the_cans_distance_is_exact_on_its_side_its_caps_and_round_its_rims():
+    """The solid the fingers close on: signed distance to a capped cylinder, negative inside, along any axis."""
+    from isu_validate.render.cabin_geometry import Cylinder
+    axis = np.array([0.0, 0.6, 0.8])
+    side = np.cross(axis, [1.0, 0.0, 0.0])
+    side /= np.linalg.norm(side)
+    can = Cylinder("can", np.zeros(3), axis, 0.03, 0.1)
+    points = [axis * 0.05, axis * 0.05 + side * 0.04, axis * 0.13, -axis * 0.01 + side * 0.01,
+              axis * 0.12 + side * 0.07, axis * 0.05 + side * 0.025, axis * 0.099]
+    expected = [-0.03, 0.01, 0.03, 0.01, np.hypot(0.02, 0.04), -0.005, -0.001]
+    np.testing.assert_allclose(can.sdf(np.array(points)), expected, atol=1e-12)
 
 
 def test_a_hand_position_the_rig_lacks_or_a_malformed_one_is_refused_with_the_fix(model, tmp_path):
@@ -280,6 +308,9 @@ def test_a_hand_position_the_rig_lacks_or_a_malformed_one_is_refused_with_the_fi
     bad = tmp_path / "bad.toml"
     bad.write_text(text.replace("palm = [0.0, 0.0, -1.0]", "palm = \"down\"", 1))
     with pytest.raises(CabinRigError, match=r"hand_positions.LAP\] needs .* palm and fingers = \[x, y, z\]"):
+        load_cabin(bad)
+    bad.write_text(text.replace('\nholds = "can"', '\nholds = "coffee"', 1))
+    with pytest.raises(CabinRigError, match=r"hand_positions.DRINK\] holds must be one of nothing, can"):
         load_cabin(bad)
     bad.write_text(text.replace("\nat_ear = true", "\nat_ear = \"yes\"", 1))
     with pytest.raises(CabinRigError, match=r"phone_positions.P1\] at_ear must be true or false"):

@@ -41,7 +41,7 @@ def test_a_free_hand_moves_the_arm_and_a_read_screen_is_lit_and_black_when_off(t
 
     from isu_validate.render import open_renderer
     from isu_validate.render.labels import INSTANCE_ID
-    variants = {"wheel": {}, "lap": {"driver_hands": "LAP"},
+    variants = {"wheel": {}, "lap": {"driver_hands": "LAP"}, "drink": {"driver_hands": "DRINK"},
                 "read_by_use": {"phone_position": "P5"}, "read_off": {"phone_position": "P5", "phone_screen": "OFF"}}
     frames = {}
     with open_renderer("draft", space="isu-diverse", channels=("seg",), log_dir=tmp_path / "logs") as r:
@@ -53,6 +53,10 @@ def test_a_free_hand_moves_the_arm_and_a_read_screen_is_lit_and_black_when_off(t
     (wheel, wheel_seg), (lap, lap_seg) = frames["wheel"], frames["lap"]
     moved = (np.abs(lap - wheel).max(axis=2) > 24) & ((wheel_seg == driver) | (lap_seg == driver))
     assert moved.sum() >= 100, f"the right hand on the lap changed only {moved.sum()} driver pixels"
+    # drinking: the can shows in the hand as its own instance, never as the co-driver seat's can
+    can = INSTANCE_ID["colacan_in_hand"]
+    assert (frames["drink"][1] == can).sum() >= 50 and not (wheel_seg == can).any()
+    assert not (frames["drink"][1] == INSTANCE_ID["colacan_codriver_seat"]).any()
     # texting on the lap: the camera sees the screen, lit by default and black glass when OFF
     (lit, seg), (dark, _) = frames["read_by_use"], frames["read_off"]
     screen = seg == phone

@@ -156,6 +156,18 @@ def test_scores_of_one_class_ties_and_nothing_answered():
     assert garbage["confusion"]["labels"] == ["YES", "NO", "MAYBE"] and garbage["accuracy"] == 0.5
 
 
+def test_answers_per_label_count_a_photo_under_each_of_its_labels_and_leave_the_unanswered_out_of_the_share():
+    from isu_validate.transfer.scores import said_by_label
+    rows = [(("drinking",), "NO", "YES"), (("drinking",), "NO", "NO"), (("drinking",), "NO", None),
+            (("phone", "seatbelt"), "YES", "YES"), (("seatbelt",), "NO", "NO"), ((), "NO", "NO")]
+    table = said_by_label(rows, "YES")
+    assert list(table) == ["(no label)", "drinking", "phone", "seatbelt"]
+    assert table["drinking"] == {"n": 3, "truth": {"NO": 3}, "said": {"(unanswered)": 1, "NO": 1, "YES": 1},
+                                 "said_positive": 0.5}
+    assert table["seatbelt"]["n"] == 2 and table["seatbelt"]["said_positive"] == 0.5
+    assert said_by_label([(("x",), "NO", None)], "YES")["x"]["said_positive"] is None   # nothing answered
+
+
 def test_bootstrap_interval_is_seeded_and_holds_the_estimate():
     answers = [Answer(t, s) for t, s in [("YES", "YES")] * 30 + [("YES", "NO")] * 10 + [("NO", "NO")] * 8
                + [("NO", "YES")] * 12]
@@ -188,6 +200,12 @@ def test_transfer_end_to_end_resumes_and_refuses_other_settings(class_set, tmp_p
     assert summary["renders"]["scores"]["phone_position"]["n"] == 200 - hidden   # the shipped model's held-out renders
     assert "zero_shot" not in summary["settings"] and "zero_shot" not in summary
     assert summary["sets"]["set"]["scores"]["seat_belt"]["n"] == 4      # only c0 says the belt
+    by_label = phone["said_by_label"]                             # per class folder: what was said
+    assert {k: v["n"] for k, v in by_label.items()} == {"c0": 4, "c1": 3}
+    assert by_label["c0"]["truth"] == {"NO": 4} and by_label["c0"]["said"].get("(unanswered)") == 1
+    assert by_label["c1"]["said_positive"] == pytest.approx(phone["recall"]["YES"]["rate"])   # c1 alone is YES
+    assert "set: said YES per label (* truly YES; n)" in printed and " c1* " in printed
+    assert "set: answers per label of the set" in (out / "report.html").read_text()
     lines = [json.loads(x) for x in (out / "answers.jsonl").read_text().splitlines()]
     assert {x["set"] for x in lines} == {"set", "renders"}
     html = (out / "report.html").read_text()

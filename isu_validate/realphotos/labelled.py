@@ -21,6 +21,7 @@ class LabelledPhoto:
     path: Path
     answers: dict[str, str]            # feature -> true answer (an option of its question)
     boxes: tuple[Box, ...] = ()
+    labels: tuple[str, ...] = ()       # the set's own labels of it (class, box classes), sorted
 
 
 @dataclass
@@ -51,7 +52,7 @@ def label_photos(photo_set: PhotoSet, label_map: LabelMap, skip_conflicts: bool 
         if not answers:
             out.unanswered += 1
             continue
-        out.photos.append(LabelledPhoto(photo.path, answers, photo.boxes))
+        out.photos.append(LabelledPhoto(photo.path, answers, photo.boxes, tuple(sorted(photo.labels()))))
     if not out.photos:
         raise InputError(f"no photo of {photo_set.root} has a label that {label_map.path} maps (its labels: "
                          f"{', '.join(sorted(out.unmapped)) or 'none'})")

@@ -110,6 +110,14 @@ def _check(raw: dict, where: str) -> None:
             raise CabinRigError(f"{where}: [hand_positions.{name}] needs hand = 'left'|'right', relative_to = "
                                 f"'head'|'shoulder'|'wheel', offset = [x, y, z] and the directions palm and "
                                 f"fingers = [x, y, z] (see rigs/cabins/default.toml)")
+        if spec.get("holds", "nothing") not in HAND_HOLDS:
+            raise CabinRigError(f"{where}: [hand_positions.{name}] holds must be one of {', '.join(HAND_HOLDS)} "
+                                f"(what the hand holds there), got {spec['holds']!r}")
+
+
+# what a rig hand position's hand may hold: nothing (an open hand) or a can, gripped round its body with
+# its top towards the thumb (drinking)
+HAND_HOLDS = ("nothing", "can")
 
 
 def _reaches(spec: dict) -> bool:

@@ -67,6 +67,24 @@ class Capsule:
         return np.linalg.norm(p - (self.a + t[..., None] * ab), axis=-1) - self.radius
 
 
+@dataclass(frozen=True)
+class Cylinder:
+    """A capped cylinder from its base centre along ``axis`` (a unit vector): a can in the hand."""
+    name: str
+    base: np.ndarray
+    axis: np.ndarray
+    radius: float
+    height: float
+
+    def sdf(self, points: np.ndarray) -> np.ndarray:
+        q = np.asarray(points, float) - self.base
+        h = q @ self.axis
+        radial = np.linalg.norm(q - h[..., None] * self.axis, axis=-1) - self.radius
+        along = np.abs(h - self.height / 2) - self.height / 2
+        outside = np.hypot(np.maximum(radial, 0.0), np.maximum(along, 0.0))
+        return outside + np.minimum(np.maximum(radial, along), 0.0)
+
+
 def rot_y(angle_rad: float) -> np.ndarray:
     c, s = math.cos(angle_rad), math.sin(angle_rad)
     return np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
@@ -79,6 +97,15 @@ PHONE_SIZE = (0.074, 0.152, 0.0085)   # the smartphone: width (local x), length 
 def phone_box(centre, R) -> Box:
     """The phone held or lying at ``centre``, turned by ``R``: what fingers close on."""
     return Box("phone", tuple(np.asarray(centre, float)), PHONE_SIZE, np.asarray(R, float), rounded=0.15)
+
+
+CAN_RADIUS, CAN_HEIGHT = 0.033, 0.116   # the 330 ml can (on the co-driver seat, or held to drink from)
+
+
+def can_cylinder(centre, R) -> Cylinder:
+    """The can held at ``centre`` (its middle), its axis (base to top) along ``R``'s local z."""
+    axis = np.asarray(R, float)[:, 2]
+    return Cylinder("can", np.asarray(centre, float) - axis * CAN_HEIGHT / 2, axis, CAN_RADIUS, CAN_HEIGHT)
 
 
 CARRIER_RECLINE_DEG = 35.0   # the rear-facing carrier's back plate, from the horizontal

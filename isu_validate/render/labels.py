@@ -16,7 +16,7 @@ INSTANCES = {
     8: ("phone", "phone"), 9: ("child_seat", "child_seat"), 10: ("child", "child"), 11: ("luggage", "luggage"),
     12: ("colabottle_codriver_seat", "colabottle"), 13: ("colacan_codriver_seat", "colacan"),
     14: ("interior_light", "interior_light"), 15: ("board", "board"), 16: ("driver_face", "driver"),
-    17: ("phone_codriver_seat", "phone"),
+    17: ("phone_codriver_seat", "phone"), 18: ("colacan_in_hand", "colacan"),
 }
 # driver_face: the driver's head (face, hair, ears); the rest of the body stays "driver". A body model
 # that replaces the procedural driver keeps both pass indices (see README: per-feature visibility).

@@ -18,6 +18,7 @@ class Item:
     image: Path
     truth: dict[str, str]     # feature -> true answer
     group: str | None = None  # its cluster (driver, clip) where the set says
+    labels: tuple[str, ...] = ()   # a real photo's own labels (class folder, box classes): answers per label
 
 
 def ask_all(sut, space: SceneSpace, items: list[Item], features: list[str], label: str, prompt: str | None = None,
@@ -37,7 +38,8 @@ def ask_all(sut, space: SceneSpace, items: list[Item], features: list[str], labe
                         "p": {q.key: probabilities[q.key] for q in questions if q.key in probabilities},
                         "error": response.error, "problems": list(response.problems),
                         "latency_s": round(response.latency_s, 4),
-                        "cached": all(response.extra.get("cached", [False]))})
+                        "cached": all(response.extra.get("cached", [False])),
+                        **({"labels": list(item.labels)} if item.labels else {})})
         progress.update(failed=any(said.get(q.key) != q.truth for q in questions), errored=bool(response.error),
                         resumed=records[-1]["cached"])
     progress.close()

@@ -21,7 +21,7 @@ from ..realphotos.groups import group_of, read_groups
 from ..space import SceneSpace, load_space
 from .ask import Item, ask_all
 from ..sut.version import sut_version
-from .scores import Answer, positive_class, score
+from .scores import Answer, positive_class, said_by_label, score
 
 FORMAT = "isu-validate-transfer/1"
 SUMMARY, ANSWERS, REPORT = "summary.json", "answers.jsonl", "report.html"
@@ -124,7 +124,7 @@ def read_real_sets(settings: TransferSettings, space: SceneSpace) -> list[RealSe
         base = photo_set.root
         groups = _groups_of(settings, root)
         items = [Item(str(p.path.relative_to(base)) if p.path.is_relative_to(base) else str(p.path), p.path,
-                      p.answers, group_of(groups, p.path, base) if groups else None) for p in photos]
+                      p.answers, group_of(groups, p.path, base) if groups else None, p.labels) for p in photos]
         missing = sum(item.group is None for item in items) if groups else 0
         if missing:
             raise InputError(f"the groups file of {root} names no group for {missing} of its labelled photos "
@@ -193,11 +193,15 @@ def _scores(records: list[dict], space: SceneSpace, features: list[str], seed: i
     for feature in features:
         options = space.features[feature].options
         positive = positive_class(options)
+        asked = [r for r in records if feature in r["truth"]]
         answers = [Answer(r["truth"][feature], r["said"].get(feature),
                           (r["p"].get(feature) or {}).get(positive) if r.get("p") else None, r.get("group"))
-                   for r in records if feature in r["truth"]]
+                   for r in asked]
         if answers:
             out[feature] = score(answers, options, seed)
+        if any(r.get("labels") for r in asked):
+            out[feature]["said_by_label"] = said_by_label(
+                [(tuple(r.get("labels") or ()), r["truth"][feature], r["said"].get(feature)) for r in asked], positive)
     return out
 
 

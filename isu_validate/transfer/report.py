@@ -86,9 +86,21 @@ def _feature(summary: dict, feature: str, space) -> str:
     matrices = [_confusion(title, sc[feature]) for title, sc in
                 [(f"real: {n}", s["scores"]) for n, s in summary["sets"].items()]
                 + ([("renders", renders["scores"])] if renders else []) if feature in sc]
+    by_label = [_by_label(name, s["scores"][feature]) for name, s in summary["sets"].items() if feature in s["scores"]]
     question = space.features[feature].question
     return section(f"{feature}: {question}", table(list(rows[0]), rows) if rows else paragraph("(no photo)"),
-                   *matrices, anchor=f"f-{feature}")
+                   *matrices, *by_label, anchor=f"f-{feature}")
+
+
+def _by_label(name: str, sc: dict) -> str:
+    """What the SUT said per label of the real set (class folder, box class): where its false answers come from."""
+    if not sc.get("said_by_label"):
+        return ""
+    def counts(c):
+        return ", ".join(f"{k} {v}" for k, v in c.items())
+    rows = [{"label": label, "photos": e["n"], "true answers": counts(e["truth"]), "said": counts(e["said"]),
+             "share said positive": fmt(e["said_positive"])} for label, e in sc["said_by_label"].items()]
+    return f"<h3>real: {esc(name)}: answers per label of the set</h3>" + table(list(rows[0]), rows)
 
 
 def _confusion(title: str, sc: dict) -> str:

@@ -62,6 +62,25 @@ def score(answers: list[Answer], options: tuple[str, ...] | list[str], seed: int
     return out
 
 
+def said_by_label(rows: list[tuple[tuple[str, ...], str, str | None]], positive: str) -> dict:
+    """Per label of the real set (its class folder, a box class; a photo counts under each of its labels):
+    how many photos, their true answers, what the SUT said, and the share it said ``positive`` among those
+    it answered. Where a SUT's false answers come from: State Farm's drinking photos read as a phone."""
+    table: dict[str, dict] = {}
+    for labels, truth, said in rows:
+        for label in labels or ("(no label)",):
+            entry = table.setdefault(label, {"n": 0, "truth": Counter(), "said": Counter()})
+            entry["n"] += 1
+            entry["truth"][truth] += 1
+            entry["said"][said or "(unanswered)"] += 1
+    out = {}
+    for label, e in sorted(table.items()):
+        answered = e["n"] - e["said"].get("(unanswered)", 0)
+        out[label] = {"n": e["n"], "truth": dict(sorted(e["truth"].items())), "said": dict(sorted(e["said"].items())),
+                      "said_positive": e["said"].get(positive, 0) / answered if answered else None}
+    return out
+
+
 def _median_p(answered: list[Answer]) -> float | None:
     """The median probability the SUT gave the positive class (a SUT that says YES to everything: near 1)."""
     values = [a.p_positive for a in answered if a.p_positive is not None]

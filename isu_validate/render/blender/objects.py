@@ -8,9 +8,9 @@ import math
 
 import bpy
 import numpy as np
-from mathutils import Vector
+from mathutils import Matrix, Vector
 
-from ..cabin_geometry import CHILD_SEAT_PADS, PHONE_SIZE, child_seat_boxes, pitch
+from ..cabin_geometry import CAN_HEIGHT, CAN_RADIUS, CHILD_SEAT_PADS, PHONE_SIZE, child_seat_boxes, pitch
 from ..labels import INSTANCE_ID
 from .. import product_art as art
 from . import materials
@@ -190,8 +190,8 @@ def build_cola_bottle(coll, instance: str) -> Group:
 
 
 # a 330 ml can: domed base, body, necked top
-_CAN = [(0.0, 0.004), (0.026, 0.0), (0.031, 0.003), (0.033, 0.010), (0.033, 0.104), (0.0295, 0.113),
-        (0.0285, 0.116), (0.0, 0.116)]
+_CAN = [(0.0, 0.004), (0.026, 0.0), (0.031, 0.003), (CAN_RADIUS, 0.010), (CAN_RADIUS, 0.104), (0.0295, 0.113),
+        (0.0285, CAN_HEIGHT), (0.0, CAN_HEIGHT)]
 
 
 def build_can(coll, instance: str) -> Group:
@@ -241,10 +241,11 @@ class Objects:
             if key.startswith(prefix):
                 group.show(key == keep)
 
-    def apply(self, f: dict, hand_pose) -> None:
+    def apply(self, f: dict, hand_pose, can_pose=None) -> None:
         self._child_seat(f)
         self._luggage(f)
         self._phone_in_hand(hand_pose, f.get("phone_screen", "BY_USE"))
+        self._can_in_hand(can_pose)
         for feature, (part, build) in ON_CODRIVER_SEAT.items():
             self._on_codriver_seat(feature, f.get(feature) == "YES", part, build)
 
@@ -291,6 +292,18 @@ class Objects:
         for obj in group.parts:
             if obj.name.startswith("phone_screen"):
                 obj.hide_render = not lit
+
+    def _can_in_hand(self, can_pose) -> None:
+        """The can a driver drinks from (isu-diverse's driver_hands DRINK): the seat's can model, its own
+        render instance (not the co-driver seat's can, which is a predicted feature)."""
+        if can_pose is None:
+            self._show_only("colacan_in_hand", None)
+            return
+        group = self._group("colacan_in_hand", lambda: build_can(self.coll, "colacan_in_hand"), "colacan")
+        centre, R = can_pose
+        group.place(Vector((centre - R[:, 2] * CAN_HEIGHT / 2).tolist()),
+                    Matrix([list(row) for row in R]).to_euler("XYZ"))
+        group.show(True)
 
     def _on_codriver_seat(self, feature: str, present: bool, part: str, build) -> None:
         if not present:

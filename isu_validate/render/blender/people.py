@@ -104,7 +104,7 @@ _mesh = M.arrays_mesh    # a mesh from arrays (one home: mesh.py)
 
 class Driver:
     """The driver: an anny body in clothes (``clothes.py``), the seat belt over them when worn, the phone in hand, and
-    the driver's seat slid on its track to fit (with the belt buckle mounted on it)."""
+    the driver's seat slid on its track to fit (with the belt buckle mounted on it); a can in the other hand."""
 
     def __init__(self, rig: dict, coll, seat_parts: list):
         # one persistent person per topology (the genders differ in topology), so a change of
@@ -112,7 +112,7 @@ class Driver:
         self.coll, self.persons, self.person = coll, {}, None
         self.outfits: dict[str, Outfit] = {}     # per topology, like the persons
         self.belt = _Belt(rig["seat_belt"], coll)
-        self.phone_hand = None
+        self.phone_hand = self.can_hand = None
         self.seat = [(obj, obj.location.x) for obj in seat_parts]
 
     def slide_seat(self, shift: float) -> None:
@@ -138,9 +138,11 @@ class Driver:
                 outfit.hide()
         dressed = self.outfits[spec["topology"]].apply(spec["outfit"], spec["dressed"], f)
         self.belt.apply(dressed, f["seat_belt"] == "YES")   # the straps lie on the clothes
-        self.phone_hand = None
+        self.phone_hand = self.can_hand = None
         if "phone_centre" in data:   # the phone lies in the posed palm, turned as the rig's position says
             self.phone_hand = (Vector(data["phone_centre"].tolist()), f["phone_position"])
+        if "can_centre" in data:     # a can held to drink from (a rig hand position that holds one)
+            self.can_hand = (np.asarray(data["can_centre"], float), np.asarray(data["can_rotation"], float))
 
     def hide(self) -> None:
         for person in self.persons.values():
@@ -149,11 +151,15 @@ class Driver:
             outfit.hide()
         self.belt.hide()
         self.slide_seat(0.0)
-        self.phone_hand = None
+        self.phone_hand = self.can_hand = None
 
     def hand_pose(self):
         """(phone centre, phone position) when a hand holds the phone, else None."""
         return self.phone_hand
+
+    def can_pose(self):
+        """(centre, 3x3 rotation: local z from base to top) when a hand holds a can, else None."""
+        return self.can_hand
 
 
 class Child:

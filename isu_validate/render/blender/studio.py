@@ -155,7 +155,7 @@ class Studio:
         else:
             self.driver.apply(features, people["driver"])
         self.child.apply(people.get("child"), features)
-        self.objects.apply(features, self.driver.hand_pose())
+        self.objects.apply(features, self.driver.hand_pose(), self.driver.can_pose())
         self._board(extras.get("board"))
 
     def _board(self, spec: dict | None) -> None:

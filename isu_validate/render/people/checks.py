@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..cabin_geometry import phone_box, seat_boxes, wheel_solids
+from ..cabin_geometry import can_cylinder, phone_box, seat_boxes, wheel_solids
 from .seated import shifted_seat
 from .surface import Surface
 
@@ -27,6 +27,11 @@ def driver_measures(state: dict, topology: dict, cabin: dict) -> dict[str, float
     if "phone_centre" in state:
         out["phone_to_palm"] = float(np.linalg.norm(v[hands] - state["phone_centre"], axis=1).min())
         out.update(phone_grip_measures(v[hands], state["phone_centre"], state["phone_rotation"]))
+    if "can_centre" in state:
+        can = can_cylinder(state["can_centre"], state["can_rotation"])
+        d = can.sdf(v[hands])
+        out.update(can_clear_hand=float(d.min()), can_touch=float((d < 0.005).sum()),
+                   can_clear_body=float(can.sdf(v[~hands]).min()))
     return out
 
 

@@ -154,6 +154,8 @@ class People:
                       head_centre=dp.head_centre.astype(np.float32))
         if dp.phone is not None:
             record.update(phone_centre=dp.phone[0].astype(np.float32), phone_rotation=dp.phone[1].astype(np.float32))
+        if dp.can is not None:
+            record.update(can_centre=dp.can[0].astype(np.float32), can_rotation=dp.can[1].astype(np.float32))
         self.store.put("driver-pose", key, record)
         return record
 

@@ -3,7 +3,7 @@ backrest, clear of both; the seat slid on its track until the wheel is in reach)
 feet towards the pedals, hands on the steering wheel at ten and two, or
 one hand holding the phone at one of the rig's phone positions P1-P10 (reached by inverse kinematics,
 the phone placed in the posed palm), and a free hand off the wheel at one of the rig's hand positions
-(on the lap, at the console, at the face...: what hands do besides holding a phone).
+(on the lap, at the console, at the face, a can to the mouth...: what hands do besides holding a phone).
 
 anny's frame (Z up, the body faces -Y, its left is +X) is turned into the cabin's (x forward, y left,
 z up) by the root bone's world pose, so every joint is solved directly in cabin coordinates."""
@@ -14,7 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..cabin_geometry import PHONE_SIZE, RIM_TUBE, phone_box, rim_point, seat_boxes, wheel_frame
+from ..cabin_geometry import (CAN_RADIUS, PHONE_SIZE, RIM_TUBE, can_cylinder, phone_box, rim_point, seat_boxes,
+                              wheel_frame)
 from .hands import FINGERS, HandFrame, close_on, hand_frame, turn_to, wrap
 from .limbs import Limb, reach
 from .regions import bone_weights
@@ -25,6 +26,7 @@ RECLINE_DEG = 14.0       # the torso leans back with the backrest (17 deg): a li
 GRIP_CLOCK = {"L": 150.0, "R": 30.0}   # ten and two: angles from three o'clock
 PHONE_ALONG = 0.85                     # the phone's middle lies across the palm this far from wrist to knuckles
 PHONE_SHIFT = 0.03                     # ... and this far towards its top from the hand's middle (m)
+CAN_ALONG = 0.7                        # a held can's axis crosses the hand this far from wrist to knuckles
 PALM_HALF = 0.014                      # from the hand's axis to the palm's surface (m)
 GRIP_PALM = 0.036                      # the hand's axis this far off the rim's surface (m)
 GRIP_ALONG = 0.55                      # the rim crosses the hand this far from wrist to knuckles
@@ -44,6 +46,7 @@ class DriverPose:
     phone: tuple[np.ndarray, np.ndarray] | None      # (centre, 3x3 rotation) of the phone in the hand
     head_centre: np.ndarray
     seat_shift: float     # how far the seat was slid forward on its track (m)
+    can: tuple[np.ndarray, np.ndarray] | None = None  # (centre, 3x3 rotation, local z base to top) of a held can
 
 
 def anny_to_cabin() -> np.ndarray:
@@ -77,9 +80,9 @@ def seat_and_pose(body: Body, rig: dict, phone_position: str = "NONE", hands: st
         posed = body.evaluate({**deltas, **arm})
         for side, grip in grips.items():
             grip.palm_target = grip.palm_target + grip.palm_target - hand_frame(posed, side).palm(grip.along)
-    # hands close round the rim or the phone, measured on the posed hand with straight fingers
+    # hands close round the rim, the phone or the can, measured on the posed hand with straight fingers
     straight = body.evaluate({**deltas, **{b: m for b, m in arm.items() if not b.startswith("finger")}})
-    phone = None
+    phone = can = None
     for side, grip in grips.items():
         if grip.holds == "wheel":
             point, tangent, _ = rim_point(rig["steering_wheel"], GRIP_CLOCK[side])
@@ -88,8 +91,12 @@ def seat_and_pose(body: Body, rig: dict, phone_position: str = "NONE", hands: st
             frame = hand_frame(straight, side)
             phone = _phone_in(frame, spec, _palm_skin(straight, frame, side, body.model))
             arm.update(close_on(straight, side, phone_box(*phone).sdf, frame.p))
+        elif grip.holds == "can":
+            frame = hand_frame(straight, side)
+            can = _can_in(frame, _palm_skin(straight, frame, side, body.model, CAN_ALONG, CAN_RADIUS))
+            arm.update(close_on(straight, side, can_cylinder(*can).sdf, frame.p))
     posed = body.evaluate({**deltas, **arm})
-    return DriverPose(posed, {**deltas, **arm}, phone, head_centre, shift)
+    return DriverPose(posed, {**deltas, **arm}, phone, head_centre, shift, can)
 
 
 def shifted_seat(seat: dict, shift: float) -> dict:
@@ -191,7 +198,7 @@ class Grip:
     G_hand: np.ndarray
     a: np.ndarray
     along: float
-    holds: str            # "wheel", "phone" or "nothing" (a rig hand position: its fingers stay straight)
+    holds: str            # "wheel", "phone", "can" or "nothing" (an open hand: its fingers stay straight)
 
 
 def _wheel_grip(rest: Posed, side: str, rig: dict) -> Grip:
@@ -222,12 +229,13 @@ def _phone_grip(rest: Posed, side: str, spec: dict, rig: dict, head_centre: np.n
 
 
 def _free_grip(rest: Posed, side: str, spec: dict, rig: dict, head_centre: np.ndarray) -> Grip:
-    """An empty hand: the palm's middle at the rig's point, facing ``palm``, the fingers towards ``fingers``."""
+    """A hand off the wheel: the palm's middle at the rig's point, facing ``palm``, the fingers towards
+    ``fingers``; empty, or holding what the rig's ``holds`` says (a can: ``_can_in``)."""
     p = _unit(spec["palm"])
     a = np.asarray(spec["fingers"], float)
     a = _unit(a - p * (a @ p))
     centre = _reference(rest, spec, rig, head_centre) + np.asarray(spec["offset"], float)
-    return _grip(rest, side, a, p, centre - p * PALM_HALF, GRIP_ALONG, "nothing")
+    return _grip(rest, side, a, p, centre - p * PALM_HALF, GRIP_ALONG, spec.get("holds", "nothing"))
 
 
 def _reference(rest: Posed, spec: dict, rig: dict, head_centre: np.ndarray) -> np.ndarray:
@@ -258,15 +266,26 @@ def _phone_in(frame: HandFrame, spec: dict, palm_skin: float) -> tuple[np.ndarra
     return frame.palm(PHONE_ALONG, palm_skin + PHONE_THICKNESS / 2) + R[:, 1] * PHONE_SHIFT, R
 
 
-def _palm_skin(posed: Posed, frame: HandFrame, side: str, model) -> float:
-    """How far the palm's skin stands off the hand's axis where the phone lies (the pads at the
-    knuckles stand out further than the middle of the palm, PALM_HALF)."""
+def _can_in(frame: HandFrame, palm_skin: float) -> tuple[np.ndarray, np.ndarray]:
+    """The can's body on the posed palm's skin across the hand, its top towards the thumb (local z)."""
+    z = frame.t - frame.p * (frame.t @ frame.p)
+    z = z / np.linalg.norm(z)
+    R = np.column_stack([frame.p, np.cross(z, frame.p), z])
+    return frame.palm(CAN_ALONG, palm_skin + CAN_RADIUS), R
+
+
+def _palm_skin(posed: Posed, frame: HandFrame, side: str, model, along: float = PHONE_ALONG,
+               half: float = PHONE_SIZE[0] / 2) -> float:
+    """How far the palm's skin stands off the hand's axis where a held thing lies, ``along`` the hand and
+    ``half`` its width either side (the pads at the knuckles stand out further than the middle of the
+    palm, PALM_HALF)."""
     bones = [f"metacarpal{k}.{side}" for k in (1, 2, 3, 4)] + [f"finger{k}-1.{side}" for k in FINGERS]
     palm = bone_weights(model, tuple(bones)) > 0.5
     local = posed.vertices[palm].astype(float) - frame.wrist
-    along = local @ frame.a / frame.length
-    under = np.abs(along - PHONE_ALONG) < PHONE_SIZE[0] / 2 / frame.length
-    return float(max(PALM_HALF, (local[under] @ frame.p).max()) + 0.0005)
+    share = local @ frame.a / frame.length
+    under = np.abs(share - along) < half / frame.length
+    skin = (local[under] @ frame.p).max() if under.any() else PALM_HALF
+    return float(max(PALM_HALF, skin) + 0.0005)
 
 
 # ---------------------------------------------------------------------- helpers
