@@ -42,7 +42,7 @@ from .worker import BlenderWorker, WorkerCrashed, WorkerFailed, WorkerTimeout
 # over the bob, a world outside the windows (HDRI by light and surroundings, the sun in HIGH light), a furnished
 # cabin in car styles, garments and accessories
 # 10 (issue 44): hands off the wheel without a phone (isu-diverse's driver_hands), the phone's screen dark in a
-# call at the ear; later driver_hands DRINK (a can held to the mouth), a new value that changes no earlier
+# call at the ear; later driver_hands DRINK (a can held to the mouth) and TEMPLE, new values that change no earlier
 # scene's frame (so no bump: the people's code hash in every cache key re-poses them)
 RENDERER_VERSION = "isu-blender-10"
 
