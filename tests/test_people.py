@@ -244,7 +244,8 @@ def test_eyes_teeth_and_hair_styles_are_where_a_face_has_them(people, model):
     assert people_module.hair_style_of({"driver_hair_style": "BY_GENDER"}, "male") == "short"
 
 
-@pytest.mark.parametrize("hands, phone", [("LAP", "NONE"), ("HAIR", "NONE"), ("LAP", "P3"), ("DRINK", "NONE"), ("TEMPLE", "NONE")])
+@pytest.mark.parametrize("hands, phone", [("LAP", "NONE"), ("HAIR", "NONE"), ("LAP", "P3"), ("DRINK", "NONE"),
+                                         ("TEMPLE", "NONE")])
 def test_a_free_hand_leaves_the_wheel_for_its_rig_position_and_a_phone_in_that_hand_wins(people, hands, phone):
     """isu-diverse's driver_hands: one hand off the wheel at the rig's point, the other still on the rim, the
     body clear of seat and wheel; a phone held in the same hand takes the hand (LAP + P3: reading)."""

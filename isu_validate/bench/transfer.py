@@ -185,7 +185,9 @@ def _headline(summary: dict) -> dict:
 
 
 def format_table(rows: list[dict]) -> str:
-    """recipe x (set, feature): balanced accuracy [95% CI]; KID per set; seconds."""
+    """recipe x (set, feature): balanced accuracy [95% CI]; KID per set; seconds; answers per label of a set."""
+    from ..transfer.scores import format_said_by_label
+
     lines = []
     for r in rows:
         s = r["summary"]
@@ -196,6 +198,7 @@ def format_table(rows: list[dict]) -> str:
             cells = [f"{f} BA {_ci(sc)}" for f, sc in real["scores"].items()]
             kid_text = f"KID {kid['kid_mean']:.4f} ± {kid['kid_std']:.4f}" if kid else "KID -"
             lines.append(f"  real {name:<18} " + "; ".join(cells) + f"; {kid_text}")
+            lines += [f"  {line}" for sc in real["scores"].values() for line in format_said_by_label(name, sc)]
         if s.get("renders"):
             cells = [f"{f} BA {_ci(sc)}" for f, sc in s["renders"]["scores"].items()]
             lines.append(f"  {'own held-out renders':<23} " + "; ".join(cells))

@@ -76,6 +76,8 @@ def run(args) -> int:
 
 
 def format_summary(summary: dict) -> str:
+    from ..transfer.scores import format_said_by_label
+
     """One table per feature: each real set, then the renders; KID of each set against the renders."""
     lines = []
     header = (f"{'':<30}{'n':>5} {'acc':>6} {'95% CI':>11} {'BA':>6} {'BA 95% CI':>11} {'majority':>13} "
@@ -88,7 +90,7 @@ def format_summary(summary: dict) -> str:
                          summary["renders"]["scores"].get(feature)))
         lines += [_line(where, sc) for where, sc in rows if sc]
         for name, s in summary["sets"].items():
-            lines += _by_label_lines(name, s["scores"].get(feature) or {})
+            lines += format_said_by_label(name, s["scores"].get(feature) or {})
     for name, r in (summary.get("realism") or {}).items():
         lines.append(f"KID {name} vs renders: {r['kid_mean']:.4f} ± {r['kid_std']:.4f} (FID {r['fid']:.1f}; "
                      f"n {r['n_real']} real, {r['n_renders']} renders)")
@@ -96,32 +98,6 @@ def format_summary(summary: dict) -> str:
         from ..transfer.zero_shot import format_zero_shot
         lines += format_zero_shot(summary["zero_shot"])
     return "\n".join(lines).lstrip("\n")
-
-
-BY_LABEL_SHOWN = 24   # labels printed per set (the most photos first); all of them are in summary.json
-
-
-def _by_label_lines(name: str, sc: dict) -> list[str]:
-    """For a yes/no feature: the share of each of the set's labels the SUT answered positive, a label whose
-    photos are truly positive marked *: where false answers come from."""
-    from ..transfer.scores import positive_class
-
-    table, options = sc.get("said_by_label"), (sc.get("confusion") or {}).get("labels") or []
-    if not table or len(options) != 2:
-        return []
-    positive = positive_class(options)
-    shown = sorted(table.items(), key=lambda kv: -kv[1]["n"])[:BY_LABEL_SHOWN]
-    cells = [f"{label}{'*' if max(e['truth'], key=e['truth'].get) == positive else ''} "
-             f"{'-' if e['said_positive'] is None else format(e['said_positive'], '.0%')} ({e['n']})"
-             for label, e in sorted(shown)]
-    head = f"  {name}: said {positive} per label (* truly {positive}; n)"
-    lines, line = [head], "   "
-    for cell in cells:
-        if len(line) + len(cell) > 100:
-            lines.append(line)
-            line = "   "
-        line += f" {cell}"
-    return lines + [line] + ([f"    ... and {len(table) - len(shown)} more labels"] if len(table) > len(shown) else [])
 
 
 def _line(where: str, sc: dict) -> str:

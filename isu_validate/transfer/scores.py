@@ -81,6 +81,30 @@ def said_by_label(rows: list[tuple[tuple[str, ...], str, str | None]], positive:
     return out
 
 
+BY_LABEL_SHOWN = 24   # labels printed per set (the most photos first); all of them are in summary.json
+
+
+def format_said_by_label(name: str, sc: dict) -> list[str]:
+    """For a yes/no feature: the share of each of the set's labels the SUT answered positive, a label whose
+    photos are truly positive marked *: where false answers come from."""
+    table, options = sc.get("said_by_label"), (sc.get("confusion") or {}).get("labels") or []
+    if not table or len(options) != 2:
+        return []
+    positive = positive_class(options)
+    shown = sorted(table.items(), key=lambda kv: -kv[1]["n"])[:BY_LABEL_SHOWN]
+    cells = [f"{label}{'*' if max(e['truth'], key=e['truth'].get) == positive else ''} "
+             f"{'-' if e['said_positive'] is None else format(e['said_positive'], '.0%')} ({e['n']})"
+             for label, e in sorted(shown)]
+    head = f"  {name}: said {positive} per label (* truly {positive}; n)"
+    lines, line = [head], "   "
+    for cell in cells:
+        if len(line) + len(cell) > 100:
+            lines.append(line)
+            line = "   "
+        line += f" {cell}"
+    return lines + [line] + ([f"    ... and {len(table) - len(shown)} more labels"] if len(table) > len(shown) else [])
+
+
 def _median_p(answered: list[Answer]) -> float | None:
     """The median probability the SUT gave the positive class (a SUT that says YES to everything: near 1)."""
     values = [a.p_positive for a in answered if a.p_positive is not None]
