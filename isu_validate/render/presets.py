@@ -34,7 +34,13 @@ class Preset:
 # and resolution. OIDN with albedo/normal guides makes 1-2 samples usable; extra bounces beyond 2 changed
 # SSIM by < 0.001 here.
 PRESETS = {
-    "draft": Preset("draft", 0.5, 1, True, "FAST", 2, 1, 1, 3.0, 1.5),
+    # draft's guides unfiltered (prefilter NONE) since isu-blender-11: at 1 spp the albedo and normal passes are
+    # already clean, and FAST's joint filtering of them smeared a 64 px face's eyes and brows. Same 72 scenes
+    # (isu-paper, seed 5151): faces found 90 -> 99 % (lamps on at night 77 -> 92 %), HAPPY read happy 53 -> 60 %,
+    # phone top-5 54 -> 62 %; SSIM 0.898 -> 0.899; 1.33x the worker CPU-s (OIDN's HIGH network for clean guides
+    # is larger). NONE with OIDN's BALANCED or FAST quality cost 1.0x / 0.9x and also found the faces, but read the
+    # phone worse than before (42 %, 40 %) (render/README.md, "Draft faces at night")
+    "draft": Preset("draft", 0.5, 1, True, "NONE", 2, 1, 1, 3.0, 1.5),
     # 3 samples since isu-blender-6: the auto-exposing camera gains night frames up to 16x, and at 2 samples
     # those fell to SSIM 0.972 and the mean of lit and night frames to 0.967 (3 samples: 0.9706, 1.42x the
     # seconds of isu-blender-5's standard; render/README.md)

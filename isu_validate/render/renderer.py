@@ -44,7 +44,8 @@ from .worker import BlenderWorker, WorkerCrashed, WorkerFailed, WorkerTimeout
 # 10 (issue 44): hands off the wheel without a phone (isu-diverse's driver_hands), the phone's screen dark in a
 # call at the ear; later driver_hands DRINK (a can held to the mouth) and TEMPLE, new values that change no earlier
 # scene's frame (so no bump: the people's code hash in every cache key re-poses them)
-RENDERER_VERSION = "isu-blender-10"
+# 11 (issue 44): draft denoises with its guides unfiltered (OIDN prefilter NONE): faces at night no longer wash out
+RENDERER_VERSION = "isu-blender-11"
 
 # what the worker shows for a feature the scene space does not have (or that is inactive)
 DEFAULTS = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height": "H2", "driver_weight": "W2",
