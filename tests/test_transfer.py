@@ -338,6 +338,7 @@ def test_bench_transfer_recipes_parse_and_a_model_recipe_runs(class_set, tmp_pat
                  "--recipe", f"shipped=model:{default_model_dir()}", "--out", str(out)]) == 0
     table = capsys.readouterr().out
     assert "shipped: model" in table and "real set" in table and "own held-out renders" in table
+    assert "set, phone_position: said YES per label" in table       # which feature each per-label line is about
     row = json.loads((out / "bench.json").read_text())[0]
     assert row["scores"]["set"]["phone_position"]["n"] == 6 and row["scores"]["renders"]["phone_position"] > 0.9
 

@@ -198,7 +198,8 @@ def format_table(rows: list[dict]) -> str:
             cells = [f"{f} BA {_ci(sc)}" for f, sc in real["scores"].items()]
             kid_text = f"KID {kid['kid_mean']:.4f} ± {kid['kid_std']:.4f}" if kid else "KID -"
             lines.append(f"  real {name:<18} " + "; ".join(cells) + f"; {kid_text}")
-            lines += [f"  {line}" for sc in real["scores"].values() for line in format_said_by_label(name, sc)]
+            lines += [f"  {line}" for f, sc in real["scores"].items()
+                      for line in format_said_by_label(f"{name}, {f}", sc)]
         if s.get("renders"):
             cells = [f"{f} BA {_ci(sc)}" for f, sc in s["renders"]["scores"].items()]
             lines.append(f"  {'own held-out renders':<23} " + "; ".join(cells))
