@@ -183,7 +183,8 @@ def test_the_cache_is_keyed_reused_and_needs_no_anny_on_a_hit(people, monkeypatc
 def test_people_commands_warm_and_check_the_cache(people, capsys):
     from isu_validate.cli import main
     assert main(["people", "warm", "--limit", "1", "--cache", str(people.store.root)]) == 0
-    assert "7 drivers and 2 children" in capsys.readouterr().out   # 1 of the grid + 6 hand positions
+    drivers = 1 + len(people.cabin["hand_positions"])      # 1 of the grid + each rig hand position
+    assert f"{drivers} drivers and 2 children" in capsys.readouterr().out
     assert main(["people", "check", "--limit", "1", "--cache", str(people.store.root)]) == 0
     out = capsys.readouterr().out
     assert "clear_wheel_hands" in out and "belt_lap_resting" in out and "child_rear_clear_cs_platepad" in out
