@@ -104,7 +104,7 @@ _mesh = M.arrays_mesh    # a mesh from arrays (one home: mesh.py)
 
 class Driver:
     """The driver: an anny body in clothes (``clothes.py``), the seat belt over them when worn, the phone in hand, and
-    the driver's seat slid on its track to fit (with the belt buckle mounted on it); a can in the other hand."""
+    the driver's seat slid on its track to fit (with the belt buckle mounted on it); a can in a hand off the wheel."""
 
     def __init__(self, rig: dict, coll, seat_parts: list):
         # one persistent person per topology (the genders differ in topology), so a change of
