@@ -166,6 +166,14 @@ def test_answers_per_label_count_a_photo_under_each_of_its_labels_and_leave_the_
                                  "said_positive": 0.5}
     assert table["seatbelt"]["n"] == 2 and table["seatbelt"]["said_positive"] == 0.5
     assert said_by_label([(("x",), "NO", None)], "YES")["x"]["said_positive"] is None   # nothing answered
+    # a garbage answer ("MAYBE") is a third answer, not a third option: the yes/no line is still printed
+    from isu_validate.transfer.scores import format_said_by_label
+    sc = score([Answer("NO", "MAYBE"), Answer("NO", "YES"), Answer("YES", "YES")], ("YES", "NO"))
+    assert sc["confusion"]["labels"] == ["YES", "NO", "MAYBE"]
+    lines = format_said_by_label("set", {**sc, "said_by_label": said_by_label(
+        [(("drinking",), "NO", "MAYBE"), (("drinking",), "NO", "YES"), (("phone",), "YES", "YES")], "YES")})
+    assert lines[0] == "  set: said YES per label (* truly YES; n)" and "drinking 50% (2)" in lines[1]
+    assert "phone* 100% (1)" in lines[1]
 
 
 def test_bootstrap_interval_is_seeded_and_holds_the_estimate():

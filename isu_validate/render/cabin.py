@@ -73,6 +73,11 @@ def cabin_hash(cabin: dict) -> str:
     return digest.hexdigest()[:16]
 
 
+# what a rig hand position's hand may hold: nothing (an open hand) or a can, gripped round its body with
+# its top towards the thumb (drinking)
+HAND_HOLDS = ("nothing", "can")
+
+
 def _check(raw: dict, where: str) -> None:
     for table, keys in _REQUIRED.items():
         if not isinstance(raw.get(table), dict):
@@ -113,11 +118,6 @@ def _check(raw: dict, where: str) -> None:
         if spec.get("holds", "nothing") not in HAND_HOLDS:
             raise CabinRigError(f"{where}: [hand_positions.{name}] holds must be one of {', '.join(HAND_HOLDS)} "
                                 f"(what the hand holds there), got {spec['holds']!r}")
-
-
-# what a rig hand position's hand may hold: nothing (an open hand) or a can, gripped round its body with
-# its top towards the thumb (drinking)
-HAND_HOLDS = ("nothing", "can")
 
 
 def _reaches(spec: dict) -> bool:

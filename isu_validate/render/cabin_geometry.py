@@ -36,6 +36,13 @@ class Box:
         return float(max(0.0, (self.size[axis] / 2 + gap - local[:, axis]).max()))
 
 
+def _along_and_off(points: np.ndarray, origin: np.ndarray, axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each point's signed distance along the unit ``axis`` from ``origin``, and its distance from that axis."""
+    q = np.asarray(points, float) - origin
+    h = q @ axis
+    return h, np.linalg.norm(q - h[..., None] * axis, axis=-1)
+
+
 @dataclass(frozen=True)
 class Torus:
     """The steering wheel's rim: centre, unit normal of its plane, major and tube radius."""
@@ -46,10 +53,8 @@ class Torus:
     tube: float
 
     def sdf(self, points: np.ndarray) -> np.ndarray:
-        q = np.asarray(points, float) - self.centre
-        h = q @ self.normal
-        radial = np.linalg.norm(q - h[..., None] * self.normal, axis=-1)
-        return np.hypot(radial - self.radius, h) - self.tube
+        h, off = _along_and_off(points, self.centre, self.normal)
+        return np.hypot(off - self.radius, h) - self.tube
 
 
 @dataclass(frozen=True)
@@ -77,9 +82,8 @@ class Cylinder:
     height: float
 
     def sdf(self, points: np.ndarray) -> np.ndarray:
-        q = np.asarray(points, float) - self.base
-        h = q @ self.axis
-        radial = np.linalg.norm(q - h[..., None] * self.axis, axis=-1) - self.radius
+        h, off = _along_and_off(points, self.base, self.axis)
+        radial = off - self.radius
         along = np.abs(h - self.height / 2) - self.height / 2
         outside = np.hypot(np.maximum(radial, 0.0), np.maximum(along, 0.0))
         return outside + np.minimum(np.maximum(radial, along), 0.0)

@@ -34,7 +34,8 @@ def positive_class(options: tuple[str, ...] | list[str]) -> str:
 def score(answers: list[Answer], options: tuple[str, ...] | list[str], seed: int = 0) -> dict:
     answered = [a for a in answers if a.said is not None]
     truth_counts = Counter(a.truth for a in answers)
-    out = {"n": len(answers), "answered": len(answered), "unanswered": len(answers) - len(answered),
+    out = {"options": list(options), "n": len(answers), "answered": len(answered),
+           "unanswered": len(answers) - len(answered),
            "truth_counts": dict(sorted(truth_counts.items())),
            "said_counts": dict(sorted(Counter(a.said or "(unanswered)" for a in answers).items()))}
     majority, count = max(sorted(truth_counts.items()), key=lambda kv: kv[1])
@@ -87,10 +88,10 @@ BY_LABEL_SHOWN = 24   # labels printed per set (the most photos first); all of t
 def format_said_by_label(name: str, sc: dict) -> list[str]:
     """For a yes/no feature: the share of each of the set's labels the SUT answered positive, a label whose
     photos are truly positive marked *: where false answers come from."""
-    table, options = sc.get("said_by_label"), (sc.get("confusion") or {}).get("labels") or []
-    if not table or len(options) != 2:
+    table = sc.get("said_by_label")
+    if not table or len(sc["options"]) != 2:
         return []
-    positive = positive_class(options)
+    positive = positive_class(sc["options"])
     shown = sorted(table.items(), key=lambda kv: -kv[1]["n"])[:BY_LABEL_SHOWN]
     cells = [f"{label}{'*' if max(e['truth'], key=e['truth'].get) == positive else ''} "
              f"{'-' if e['said_positive'] is None else format(e['said_positive'], '.0%')} ({e['n']})"

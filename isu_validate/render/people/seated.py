@@ -268,8 +268,7 @@ def _phone_in(frame: HandFrame, spec: dict, palm_skin: float) -> tuple[np.ndarra
 
 def _can_in(frame: HandFrame, palm_skin: float) -> tuple[np.ndarray, np.ndarray]:
     """The can's body on the posed palm's skin across the hand, its top towards the thumb (local z)."""
-    z = frame.t - frame.p * (frame.t @ frame.p)
-    z = z / np.linalg.norm(z)
+    z = frame.t                       # unit, square to the palm's normal (hands.hand_frame)
     R = np.column_stack([frame.p, np.cross(z, frame.p), z])
     return frame.palm(CAN_ALONG, palm_skin + CAN_RADIUS), R
 
