@@ -217,3 +217,28 @@ def test_every_torch_command_has_the_device_flag(command):
     from isu_validate.cli import build_parser
     argv = [*command, "--device", "cuda:2"]
     assert build_parser(argv).parse_args(argv).device == "cuda:2"
+
+
+def test_a_gpu_without_a_shipped_kernel_gets_its_first_frame_time_to_compile(monkeypatch):
+    monkeypatch.setattr(gpu, "shipped_cubins", lambda: {"86", "120"})
+    monkeypatch.setattr(gpu, "nvidia_compute_caps", lambda: ["90"])   # an H100/H200: PTX only, ~7 min once
+    note = gpu.first_frame_compiles("cuda")
+    assert "sm_90" in note and f"{gpu.FIRST_FRAME_COMPILE_S:.0f} s" in note
+    assert gpu.first_frame_compiles("optix") is not None            # OptiX's kernels are PTX only
+    assert gpu.first_frame_compiles("cpu") is None and gpu.first_frame_compiles("hip") is None
+    monkeypatch.setattr(gpu, "shipped_cubins", lambda: {"86", "90", "120"})   # compiled ahead, beside bpy's own
+    assert gpu.first_frame_compiles("cuda") is None
+
+
+def test_only_the_first_gpu_frame_waits_for_the_kernels(monkeypatch, capsys):
+    from isu_validate.render import renderer as R
+
+    monkeypatch.setattr(R, "first_frame_compiles", lambda device: "note: compiling" if device == "cuda" else None)
+    r = R.BlenderRenderer.__new__(R.BlenderRenderer)   # the timeout logic alone: no worker, no Blender
+    r.timeout_s, r.preset, r._kernels_ready = 240.0, R.get_preset("draft"), False
+    r.preset = R.replace(r.preset, device="cuda")
+    assert r._frame_timeout() == R.FIRST_FRAME_COMPILE_S and "compiling" in capsys.readouterr().err
+    r._kernels_ready = True                                # set by a frame that came back
+    assert r._frame_timeout() == 240.0
+    r.preset, r._kernels_ready = R.replace(r.preset, device="optix"), False
+    assert r._frame_timeout() == 240.0 and r._kernels_ready   # nothing to compile: the plain limit from now on

@@ -112,3 +112,19 @@ def test_missing_inception_weights_name_the_fix(tmp_path, monkeypatch):
         inception.weights_path()
     monkeypatch.delenv(inception.WEIGHTS_ENV)
     assert inception.weights_path().name == "default_1.pt"
+
+
+def test_a_labelled_real_set_in_class_folders_is_read_whole(tmp_path):
+    """State Farm's layout (c0/ .. c9/, no image at the top): KID must count the photos `transfer` scores."""
+    rng = np.random.default_rng(3)
+    for cls, n in (("c0", 2), ("c1", 3)):
+        (tmp_path / cls).mkdir()
+        for i in range(n):
+            save(tmp_path / cls / f"img_{i}.jpg", rng.integers(0, 256, (12, 16, 3), dtype=np.uint8))
+    (tmp_path / "driver_imgs_list.csv").write_text("subject,classname,img\n")
+    image_set = resolve_set(str(tmp_path))
+    assert [p.relative_to(tmp_path).as_posix() for p in image_set.paths] == [
+        "c0/img_0.jpg", "c0/img_1.jpg", "c1/img_0.jpg", "c1/img_1.jpg", "c1/img_2.jpg"]
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(ImageError, match="holds no images.*real photo set"):
+        list_images(tmp_path / "empty")

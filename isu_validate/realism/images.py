@@ -11,7 +11,7 @@ import numpy as np
 from PIL import Image, UnidentifiedImageError
 
 from ..image_files import IMAGE_SUFFIXES  # one list of the image files every set reader accepts
-from ..errors import InputNotFound, UserError
+from ..errors import InputError, InputNotFound, UserError
 
 __all__ = ["ImageError", "list_images", "read_rgb"]
 
@@ -54,7 +54,9 @@ def list_images(folder: str | Path) -> list[Path]:
 
 def list_frames(folder: str | Path) -> tuple[list[Path], list[Path]]:
     """(frames, left out): the render by-products among the images (a contact sheet, segmentation
-    and depth images) are no samples of a domain and would bias FID/KID."""
+    and depth images) are no samples of a domain and would bias FID/KID. A folder with no images of its
+    own is read as a labelled real photo set (class folders such as State Farm's ``c0/ .. c9/``, YOLO,
+    COCO or CSV: ``realphotos.layouts``), so that KID against it counts the photos ``transfer`` scores."""
     from ..render.outputs import by_product
 
     folder = Path(folder)
@@ -62,8 +64,20 @@ def list_frames(folder: str | Path) -> tuple[list[Path], list[Path]]:
         raise InputNotFound(f"image folder {folder} does not exist")
     images = sorted(p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_SUFFIXES)
     found = [p for p in images if not by_product(p)]
+    if not found and not images:
+        found = [p for p in _photo_set(folder) if not by_product(p)]
     if not found:
         raise ImageError(
-            f"folder {folder} holds no images ({', '.join(IMAGE_SUFFIXES)}); "
-            "point to a folder of images, or to a pairs directory as PAIRS_DIR:sim|real|nst")
+            f"folder {folder} holds no images ({', '.join(IMAGE_SUFFIXES)}); point to a folder of images, "
+            "a real photo set (class folders, YOLO, COCO or CSV), or a pairs directory as PAIRS_DIR:sim|real|nst")
     return found, [p for p in images if by_product(p)]
+
+
+def _photo_set(folder: Path) -> list[Path]:
+    """The photos of ``folder`` read as a real photo set, sorted by path; none where it is no such set."""
+    from ..realphotos.layouts import read_photo_set
+
+    try:
+        return sorted(photo.path for photo in read_photo_set(folder).photos)
+    except InputError:
+        return []

@@ -3,9 +3,13 @@ key knows the device): the CPU, unless an NVIDIA GPU is present whose architectu
 compiled CUDA kernel (a cubin) for; then ``cuda``.
 
 Why so narrow: Blender 5.2.3's bpy ships cubins for a few architectures (sm_50..sm_86, sm_120) and PTX
-for the rest; on an H100 (sm_90) a probe scene gave no frame within 120 s with CUDA nor 235 s with OptiX
-(the driver compiling PTX, most likely) where 16 CPU cores took 0.7 s. OptiX's kernels are PTX only, so
-``auto`` never picks it; HIP, oneAPI and Metal were never tried here, so they are asked for by name."""
+for the rest. On an H200 (sm_90) compiling that PTX took 400 s of CPU (CUDA 13.0's ``ptxas``; the driver
+does the same work on the first frame, then keeps it in its compute cache); with the kernel compiled, a
+standard frame took 0.23 s against 0.62 s on 16 CPU cores, PSNR 61 dB from the CPU's (docs/SETUP.md). A
+first frame that silently takes minutes is no default, so ``auto`` stays on the CPU there; a GPU asked for
+by name gets that first frame's time (``first_frame_compiles``). A cubin placed beside bpy's own counts as
+shipped. OptiX's kernels are PTX only, so ``auto`` never picks it; HIP, oneAPI and Metal were never tried
+here, so they are asked for by name."""
 from __future__ import annotations
 
 import importlib.util
@@ -45,7 +49,29 @@ def nvidia_compute_caps() -> list[str]:
     return [line.strip().replace(".", "") for line in out.splitlines() if re.fullmatch(r"\d+\.\d+", line.strip())]
 
 
+# the longest a first GPU frame may take while the driver compiles Cycles' kernels (400 s measured, on 16 cores)
+FIRST_FRAME_COMPILE_S = 1800.0
+
+
+def first_frame_compiles(device: str) -> str | None:
+    """The line to print before a first frame on ``device`` that must first compile Cycles' GPU kernels
+    (its architecture has no shipped cubin, or OptiX), or None: that frame may take minutes, once."""
+    if device == "optix":
+        return ("note: OptiX compiles Cycles' kernels on the first frame (minutes, once; the driver keeps them); "
+                f"allowing it up to {FIRST_FRAME_COMPILE_S:.0f} s")
+    if device != "cuda":
+        return None
+    shipped = shipped_cubins()
+    missing = [cap for cap in nvidia_compute_caps() if cap not in shipped]
+    if not missing:
+        return None
+    return (f"note: this Blender ships no CUDA kernel for sm_{missing[0]}: the first frame compiles it from PTX "
+            f"(about 7 minutes on an H200's CPU, once; the driver keeps it); allowing it up to "
+            f"{FIRST_FRAME_COMPILE_S:.0f} s (docs/SETUP.md says how to compile it ahead with ptxas)")
+
+
 def device_identity(device: str) -> list:
     """What the device adds to the render cache key: nothing for the CPU (its caches stay valid); the type
-    for a GPU, whose pixels were never compared with the CPU's here (no GPU was available to measure)."""
+    for a GPU, whose pixels differ from the CPU's by float rounding (PSNR 61 dB on an H200): a run's frames
+    must come from one device to be reproduced bit for bit."""
     return [] if device == "cpu" else [f"render-device:{device}"]

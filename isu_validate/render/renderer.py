@@ -25,7 +25,7 @@ from .cabin import cabin_hash, load_cabin
 from .cache import RenderCache
 from .camera import pinhole_plan
 from .frame_check import frame_problem, frame_stats
-from .gpu import device_identity, resolve_render_device
+from .gpu import FIRST_FRAME_COMPILE_S, device_identity, first_frame_compiles, resolve_render_device
 from .object_axes import seat_objects_up
 from .outputs import channel_paths, footprint_pixels, parse_channels, write_outputs
 from .people import People, PeopleStore
@@ -96,6 +96,7 @@ class BlenderRenderer:
         self.show_people = True     # False renders the cabin without driver and child (bench render's people cost)
         self._identity = self._identity_hash()
         self._device_confirmed = False
+        self._kernels_ready = self.preset.device == "cpu"   # a GPU's first frame may compile its kernels
 
     def _look_through(self, rig: Camera) -> None:
         """Render through ``rig`` from now on: its pinhole plan and the labels' `up` (fixed by the camera)."""
@@ -262,7 +263,8 @@ class BlenderRenderer:
                   "position": list(self.render_rig.position), "rotation": [list(r) for r in self.render_rig.rotation]}
         reply = worker.request({"op": "render", "features": features, "camera": camera, "extras": extras,
                                 "people": people, "preset": self.preset.to_worker(), "exr": str(exr), "tag": tag,
-                                "footprints": parts, "footprint_file": str(masks)}, self.timeout_s)
+                                "footprints": parts, "footprint_file": str(masks)}, self._frame_timeout())
+        self._kernels_ready = True
         self._note_device(reply)
         t = time.perf_counter()
         try:
@@ -279,6 +281,17 @@ class BlenderRenderer:
         if parts:
             timings["footprint_s"] = reply["footprint_s"]
         return paths, visible, footprints, timings
+
+    def _frame_timeout(self) -> float:
+        """The render request's limit: longer for a GPU's first frame while Cycles compiles its kernels."""
+        if self._kernels_ready:
+            return self.timeout_s
+        note = first_frame_compiles(self.preset.device)
+        if note is None:
+            self._kernels_ready = True
+            return self.timeout_s
+        print(note, file=sys.stderr, flush=True)
+        return max(self.timeout_s, FIRST_FRAME_COMPILE_S)
 
     def _confirm_device(self) -> bool:
         """Before the first GPU frame: ask the worker whether Blender has the device; True when it fell back."""
