@@ -3,6 +3,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from isu_validate.errors import InputError
 from isu_validate.realism.images import ImageError, list_images, read_rgb
 from isu_validate.realism.resize import resize_rgb
 from isu_validate.realism.sets import resolve_set
@@ -128,3 +129,8 @@ def test_a_labelled_real_set_in_class_folders_is_read_whole(tmp_path):
     (tmp_path / "empty").mkdir()
     with pytest.raises(ImageError, match="holds no images.*real photo set"):
         list_images(tmp_path / "empty")
+    yolo = tmp_path / "yolo"                  # a set recognised by its data.yaml, but without its photos
+    (yolo / "images").mkdir(parents=True)
+    (yolo / "data.yaml").write_text("names: [phone]\n")
+    with pytest.raises(InputError, match="yolo layout"):   # its own words, not "holds no images"
+        list_images(yolo)

@@ -76,9 +76,9 @@ def run(args) -> int:
 
 
 def format_summary(summary: dict) -> str:
+    """One table per feature: each real set, then the renders; KID of each set against the renders."""
     from ..transfer.scores import format_said_by_label
 
-    """One table per feature: each real set, then the renders; KID of each set against the renders."""
     lines = []
     header = (f"{'':<30}{'n':>5} {'acc':>6} {'95% CI':>11} {'BA':>6} {'BA 95% CI':>11} {'majority':>13} "
               f"{'AUC':>6} {'P(+) med':>9}")

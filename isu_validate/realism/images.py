@@ -74,10 +74,12 @@ def list_frames(folder: str | Path) -> tuple[list[Path], list[Path]]:
 
 
 def _photo_set(folder: Path) -> list[Path]:
-    """The photos of ``folder`` read as a real photo set, sorted by path; none where it is no such set."""
-    from ..realphotos.layouts import read_photo_set
+    """The photos of ``folder`` read as a real photo set, sorted by path; none where it is no such set. A set
+    whose layout is recognised but cannot be read raises its own error (a broken data.yaml says so)."""
+    from ..realphotos.layouts import detect_layout, read_photo_set
 
     try:
-        return sorted(photo.path for photo in read_photo_set(folder).photos)
+        layout = detect_layout(folder)
     except InputError:
         return []
+    return sorted(photo.path for photo in read_photo_set(folder, layout).photos)

@@ -4,12 +4,11 @@ compiled CUDA kernel (a cubin) for; then ``cuda``.
 
 Why so narrow: Blender 5.2.3's bpy ships cubins for a few architectures (sm_50..sm_86, sm_120) and PTX
 for the rest. On an H200 (sm_90) compiling that PTX took 400 s of CPU (CUDA 13.0's ``ptxas``; the driver
-does the same work on the first frame, then keeps it in its compute cache); with the kernel compiled, a
-standard frame took 0.23 s against 0.62 s on 16 CPU cores, PSNR 61 dB from the CPU's (docs/SETUP.md). A
-first frame that silently takes minutes is no default, so ``auto`` stays on the CPU there; a GPU asked for
-by name gets that first frame's time (``first_frame_compiles``). A cubin placed beside bpy's own counts as
-shipped. OptiX's kernels are PTX only, so ``auto`` never picks it; HIP, oneAPI and Metal were never tried
-here, so they are asked for by name."""
+does the same work on the first frame, then keeps it in its compute cache); what the GPU then gains is in
+docs/SETUP.md, "GPUs". A first frame that silently takes minutes is no default, so ``auto`` stays on the CPU
+there; a GPU asked for by name gets that first frame's time (``first_frame_compiles``). A cubin placed
+beside bpy's own counts as shipped. OptiX's kernels are PTX only, so ``auto`` never picks it; HIP, oneAPI
+and Metal were never tried here, so they are asked for by name."""
 from __future__ import annotations
 
 import importlib.util
