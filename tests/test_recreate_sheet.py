@@ -151,7 +151,7 @@ def test_the_light_levels_say_what_was_rendered_and_what_to_arrange(pairs):
     medium = rows["external_light", "MEDIUM"]
     assert medium.chosen and not rows["external_light", "HIGH"].chosen and rows["car_lights", "ON"].chosen
     assert medium.practical == "a rainy afternoon in the car park"
-    assert medium.rendered == "city sky x0.3, window light 12 W/m²" and medium.relative == "0.5 (-1.0 stops)"
+    assert medium.rendered == "city sky x4.8, window light 12 W/m²" and medium.relative == "0.5 (-1.0 stops)"
     assert rows["car_lights", "ON"].rendered == "2 warm lamps of 14 W (roof, x = +0.15, -0.70 m)"
     sheet = (pairs / "S01" / "sheet.html").read_text()
     for value in ("LOW", "MEDIUM", "HIGH"):   # the shipped rig's words on every sheet

@@ -45,7 +45,9 @@ from .worker import BlenderWorker, WorkerCrashed, WorkerFailed, WorkerTimeout
 # call at the ear; later driver_hands DRINK (a can held to the mouth) and TEMPLE, new values that change no earlier
 # scene's frame (so no bump: the people's code hash in every cache key re-poses them)
 # 11 (issue 44): draft denoises with its guides unfiltered (OIDN prefilter NONE): faces at night no longer wash out
-RENDERER_VERSION = "isu-blender-11"
+# 12 (issue 44): the view outside as bright as the light the windows let in (MEDIUM x4.8, HIGH x16), the sky seen
+# by camera rays alone
+RENDERER_VERSION = "isu-blender-12"
 
 # what the worker shows for a feature the scene space does not have (or that is inactive)
 DEFAULTS = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height": "H2", "driver_weight": "W2",

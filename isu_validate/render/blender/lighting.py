@@ -99,6 +99,9 @@ class Lighting:
         self.dome.location = (0.0, 0.0, 1.1)
         self.dome.scale = (40.0, 40.0, 40.0)
         self.dome.visible_shadow = False
+        # seen by camera rays (and through glass) only: as a light source its noise costs standard's SSIM floor
+        # (0.9648 against 0.9708) and 13% more seconds, and the window lights already carry the sky's light in
+        self.dome.visible_diffuse = self.dome.visible_glossy = False
 
     def _window_lights(self, s, coll):
         """One area light per opening, just outside it, facing in: sky light without path-tracing noise."""
