@@ -160,7 +160,9 @@ def test_black_and_saturated_frames_are_render_errors_and_the_darkest_real_light
     # LOW exterior light, lamps off, black T-shirt, anthracite suitcase: the darkest legitimate frame
     dark = {**LIT, "external_light": "LOW", "tshirt_colour": "BLACK", "luggage_colour": "ANTHRACITE"}
     result, label, _ = frames("darkest", dark)
-    assert label["frame_problem"] is None and label["frame"]["luma_p99"] > 4 * BLACK_P99
+    # its 99th percentile is 48 levels since isu-blender-12 (the night sky no longer lights the cabin, only the
+    # window lights do), 4x the black threshold; 3x leaves room for another processor's noise at 1 sample
+    assert label["frame_problem"] is None and label["frame"]["luma_p99"] > 3 * BLACK_P99
 
 
 def test_a_frame_without_the_driver_is_a_render_error(tmp_path):
