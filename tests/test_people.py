@@ -401,3 +401,32 @@ def test_the_bob_has_its_locks_behind_the_forehead_and_short_hair_stays_the_shel
     assert (lowest <= z + 0.005).all(), f"{(lowest > z + 0.005).sum()} lock vertices below the bob"
     roots = cards.reshape(n, hair.LOCK_POINTS, 2, 3)[:, 0].mean(axis=1)
     assert (head.bearing(roots) <= hair.FACE_SIDE + 0.05).all()         # rooted behind the face's side
+
+
+
+READ_PHONES = ("P3", "P4", "P6", "P7", "P10")   # held up to be read: the screen faces the driver's eyes
+EDGE_ON = 0.25   # |cos| under this: the screen is seen at more than 75 degrees from face-on, a sliver at most
+
+
+def _screen_towards(camera_position, pose) -> float:
+    """Cosine between the phone's screen normal (its local +z) and the direction to the camera."""
+    centre, rotation = pose.phone
+    to_camera = np.asarray(camera_position, dtype=float) - centre
+    return float(rotation[:, 2] @ to_camera / np.linalg.norm(to_camera))
+
+
+@pytest.mark.parametrize("gender, height, weight", [("MALE", "H2", "W2"), ("FEMALE", "H1", "W1")])
+def test_a_phone_held_to_be_read_shows_its_back_or_edge_to_the_passenger_side_camera(model, gender, height, weight):
+    """As in the distracted-driver photos the rig stands for: a phone held to the face turns its dark back to
+    the camera. From the rig's earlier place, behind the face, every one showed its lit screen."""
+    from capture.camera import load_camera
+    from isu_validate.render.people.seated import seat_and_pose
+    camera, cabin = load_camera("passenger-side"), load_cabin("default")
+    before = (0.05, -0.40, 1.10)
+    for position in READ_PHONES:
+        pose = seat_and_pose(people_module.Body(model, people_module.driver_phenotype(gender, height, weight)),
+                             cabin, position)
+        (u, v), = camera.project(pose.phone[0][None, :])
+        assert 0 <= u < camera.width and 0 <= v < camera.height, position   # the phone is in the frame
+        assert _screen_towards(camera.position, pose) < EDGE_ON, position
+        assert _screen_towards(before, pose) > 0.15, position
