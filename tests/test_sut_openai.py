@@ -50,6 +50,12 @@ class ScriptedServer:
                     if callable(step):
                         step = step(body, dict(self.headers))
                     time.sleep(step.get("delay_s", 0))
+                finally:
+                    # done before the reply is written: once the client holds the reply it may send the next
+                    # request, and this thread may not have run again yet (a busy machine) to count this one out
+                    with server._lock:
+                        server.active -= 1
+                try:
                     payload = step.get("body", "")
                     data = (payload if isinstance(payload, str) else json.dumps(payload)).encode()
                     self.send_response(step.get("status", 200))
@@ -61,9 +67,6 @@ class ScriptedServer:
                     self.wfile.write(data)
                 except (BrokenPipeError, ConnectionResetError):
                     pass  # the client gave up (timeout): expected in some tests
-                finally:
-                    with server._lock:
-                        server.active -= 1
 
         self.httpd = ThreadingHTTPServer(("127.0.0.1", 0), Handler)
         self.httpd.daemon_threads = True
