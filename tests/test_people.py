@@ -403,7 +403,6 @@ def test_the_bob_has_its_locks_behind_the_forehead_and_short_hair_stays_the_shel
     assert (head.bearing(roots) <= hair.FACE_SIDE + 0.05).all()         # rooted behind the face's side
 
 
-
 READ_PHONES = ("P3", "P4", "P6", "P7", "P10")   # held up to be read: the screen faces the driver's eyes
 EDGE_ON = 0.25   # |cos| under this: the screen is seen at more than 75 degrees from face-on, a sliver at most
 
@@ -423,9 +422,9 @@ def test_a_phone_held_to_be_read_shows_its_back_or_edge_to_the_passenger_side_ca
     from isu_validate.render.people.seated import seat_and_pose
     camera, cabin = load_camera("passenger-side"), load_cabin("default")
     before = (0.05, -0.40, 1.10)
+    body = people_module.Body(model, people_module.driver_phenotype(gender, height, weight))
     for position in READ_PHONES:
-        pose = seat_and_pose(people_module.Body(model, people_module.driver_phenotype(gender, height, weight)),
-                             cabin, position)
+        pose = seat_and_pose(body, cabin, position)
         (u, v), = camera.project(pose.phone[0][None, :])
         assert 0 <= u < camera.width and 0 <= v < camera.height, position   # the phone is in the frame
         assert _screen_towards(camera.position, pose) < EDGE_ON, position
