@@ -1,6 +1,7 @@
 """The reference ISU's learning machinery on images a painter makes (no Blender here):
 balanced sampling, heads, NONE for absent things, captions, the SUT adapter, the card."""
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import cv2
@@ -10,7 +11,7 @@ import pytest
 from isu_validate.protocols import SUTRequest
 from isu_validate.reference.backbone import Backbone
 from isu_validate.reference.captioner import describe
-from isu_validate.reference.heads import fit_head, load_heads, save_heads
+from isu_validate.reference.heads import CLIP_SIGMA, fit_head, load_heads, save_heads
 from isu_validate.reference.training import balanced_scenes, train_reference, visible_label
 from isu_validate.render.outputs import channel_paths
 from isu_validate.space import load_space
@@ -199,6 +200,39 @@ def test_heads_round_trip_and_single_class_heads(tmp_path):
     assert loaded[0].predict(X) == heads[0].predict(X)
     assert np.mean(np.array(loaded[0].predict(X)) == np.array(y)) > 0.9
     assert loaded[1].predict(X[:3]) == ["ONLY"] * 3
+    assert meta["clip_sigma"] == CLIP_SIGMA and loaded[0].clip == CLIP_SIGMA
+
+
+def test_a_channel_the_training_never_moved_cannot_carry_the_answer():
+    """A photo can move a backbone channel far beyond anything the renders did: the head reads it at most
+    CLIP_SIGMA training deviations out, as it was fitted. Unclipped, the same head flips its answer."""
+    rng = np.random.default_rng(1)
+    X = rng.normal(size=(300, 6))
+    X[:, 5] = 1.0 + 1e-3 * rng.normal(size=300)       # a channel the training set barely moves
+    y = ["YES" if a + 0.3 * b > 0 else "NO" for a, b in zip(X[:, 0], X[:, 5] - 1.0)]
+    head = fit_head("f", X, y)
+    clear_no = np.array([[-2.0, 0, 0, 0, 0, 1.0]])
+    far_out = clear_no.copy()
+    far_out[0, 5] = 1.0 + 1e3                          # a million training deviations out
+    assert head.predict(clear_no) == ["NO"]
+    assert np.abs(head.standardise(far_out)).max() == CLIP_SIGMA
+    assert head.predict(far_out) == ["NO"]
+    unclipped = replace(head, clip=None)
+    assert unclipped.predict(far_out) == ["YES"]      # what the head would say without the clip
+    assert np.isfinite(head.probabilities(np.array([[np.inf] * 6]))).all()
+
+
+def test_a_model_fitted_before_clipping_reads_its_features_unclipped(tmp_path):
+    rng = np.random.default_rng(2)
+    X = rng.normal(size=(100, 4))
+    head = replace(fit_head("f", X, ["A" if v > 0 else "B" for v in X[:, 0]]), clip=None)
+    save_heads([head], tmp_path, {})
+    meta = json.loads((tmp_path / "heads.json").read_text())
+    assert "clip_sigma" not in meta                   # as the files of such a model are
+    loaded, _ = load_heads(tmp_path)
+    far = np.array([[50.0, 0, 0, 0]])
+    assert loaded[0].clip is None
+    np.testing.assert_allclose(loaded[0].standardise(far), (far - head.mean) / head.scale, rtol=1e-6)
 
 
 def test_captions_vary_in_wording_but_not_in_content():

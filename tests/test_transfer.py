@@ -373,6 +373,23 @@ def test_a_trained_recipe_is_reused_only_for_the_rig_files_it_was_made_with(tmp_
         _train(recipe, folder, args)
 
 
+def test_a_trained_recipe_kept_from_another_head_fit_is_refused(tmp_path):
+    """A model fitted before the heads clipped their features would measure that fit: refused, not reused."""
+    from argparse import Namespace
+
+    from isu_validate.bench.transfer import _train, parse_recipe, recipe_settings
+    from isu_validate.reference.heads import CLIP_SIGMA
+    recipe, args = parse_recipe("side=train:n=4,held_out=2"), Namespace(preset="draft", n=4, held_out=2, seed=0)
+    made = json.loads(recipe_settings(recipe, args)[1])
+    assert made["heads"]["clip_sigma"] == CLIP_SIGMA
+    folder = tmp_path / "side"
+    folder.mkdir()
+    before = {k: v for k, v in made.items() if k != "heads"}
+    (folder / "recipe.json").write_text(json.dumps(before, sort_keys=True))
+    with pytest.raises(InputError, match=f"head fit.*delete {folder}"):
+        _train(recipe, folder, args)
+
+
 # ---- clusters: frames of one driver are near-twins
 
 def test_group_bootstrap_is_wider_than_the_photo_bootstrap_when_groups_are_alike():

@@ -120,17 +120,20 @@ def recipe_settings(recipe: Recipe, args) -> tuple[dict, str]:
 
 
 def _made_with(options: dict) -> dict:
-    """What else decides a trained recipe's renders: the renderer version and the rig files' contents."""
+    """What else decides a trained recipe's model: the renderer version, the rig files' contents and how the
+    heads are fitted (a model kept from another fit would measure that fit)."""
     import hashlib
 
     from capture.camera import load_camera
 
+    from ..reference.heads import CLIP_SIGMA, REGULARISATION_C
     from ..render import RENDERER_VERSION
     from ..render.cabin import load_cabin
 
     cabin = json.dumps(load_cabin(options["cabin"]), sort_keys=True, default=str)
     return {"renderer": RENDERER_VERSION, "camera_hash": load_camera(options["camera"]).hash,
-            "cabin_hash": hashlib.sha256(cabin.encode()).hexdigest()[:16]}
+            "cabin_hash": hashlib.sha256(cabin.encode()).hexdigest()[:16],
+            "heads": {"C": REGULARISATION_C, "clip_sigma": CLIP_SIGMA}}
 
 
 def _train(recipe: Recipe, folder: Path, args) -> tuple[Path, Path, str]:
@@ -143,8 +146,9 @@ def _train(recipe: Recipe, folder: Path, args) -> tuple[Path, Path, str]:
     model = folder / "model"
     stored = (folder / "recipe.json").read_text() if (folder / "recipe.json").is_file() else made
     if stored != made:   # a kept model is reused only for what it was made with: a changed rig file is another recipe
-        raise InputError(f"{folder} holds recipe {recipe.name} made with other settings, renderer or rig files "
-                         f"({stored}); choose another --out or recipe name, or delete {folder} to make it again")
+        raise InputError(f"{folder} holds recipe {recipe.name} made with other settings, renderer, rig files or "
+                         f"head fit ({stored}); choose another --out or recipe name, or delete {folder} to make it "
+                         "again")
     folder.mkdir(parents=True, exist_ok=True)
     write_text(folder / "recipe.json", made)
     description = f"{RENDERER_VERSION}, " + ", ".join(f"{k}={v}" for k, v in o.items())

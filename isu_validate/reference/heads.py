@@ -1,7 +1,14 @@
 """One linear classifier per predicted feature on the backbone's features.
 
 Stored as plain arrays (``heads.npz`` + ``heads.json``), so loading needs neither
-scikit-learn nor pickle: standardise, multiply, softmax.
+scikit-learn nor pickle: standardise, clip, multiply, softmax.
+
+Why clip: the heads learn from renders, and a real photograph moves some backbone channels far
+beyond anything the renders ever did (4-5% of a photo's standardised values lie past 5 standard
+deviations; the renders' own held-out scenes almost none). Unclipped, those channels carry the
+answer: a linear head extrapolates, and State Farm's drivers with both hands on the wheel read as
+"phone" with log-odds of 15-20. Clipped at ``CLIP_SIGMA`` training standard deviations, a channel
+counts at most as much as the renders taught it to (docs/MODELS.md, "Reference ISU heads").
 """
 from __future__ import annotations
 
@@ -13,6 +20,9 @@ import numpy as np
 
 from ..errors import InputNotFound
 
+REGULARISATION_C = 0.05   # inverse L2 strength of every head's logistic regression
+CLIP_SIGMA = 3.0          # standardised features are clipped to +-3 training standard deviations
+
 
 @dataclass
 class Head:
@@ -22,11 +32,16 @@ class Head:
     scale: np.ndarray     # (D,)
     weight: np.ndarray    # (C, D); a single-class head has C = 1 and always answers that class
     bias: np.ndarray      # (C,)
+    clip: float | None = CLIP_SIGMA   # None: a model fitted before clipping (heads.json without clip_sigma)
+
+    def standardise(self, features: np.ndarray) -> np.ndarray:
+        z = (features - self.mean) / self.scale
+        return z if self.clip is None else np.clip(z, -self.clip, self.clip)
 
     def probabilities(self, features: np.ndarray) -> np.ndarray:
         if len(self.classes) == 1:
             return np.ones((len(features), 1))
-        z = ((features - self.mean) / self.scale) @ self.weight.T + self.bias
+        z = self.standardise(features) @ self.weight.T + self.bias
         if z.shape[1] == 1:  # binary logistic regression stores one row
             z = np.concatenate([-z, z], axis=1) / 2
         z -= z.max(axis=1, keepdims=True)
@@ -37,8 +52,8 @@ class Head:
         return [self.classes[i] for i in self.probabilities(features).argmax(axis=1)]
 
 
-def fit_head(feature: str, X: np.ndarray, y: list[str], C: float = 0.05, seed: int = 0) -> Head:
-    """L2-regularised multinomial logistic regression on standardised features."""
+def fit_head(feature: str, X: np.ndarray, y: list[str], C: float = REGULARISATION_C, seed: int = 0) -> Head:
+    """L2-regularised multinomial logistic regression on standardised features, clipped as they will be read."""
     from sklearn.linear_model import LogisticRegression
 
     classes = sorted(set(y))
@@ -48,7 +63,7 @@ def fit_head(feature: str, X: np.ndarray, y: list[str], C: float = 0.05, seed: i
     if len(classes) == 1:
         return Head(feature, classes, mean, scale, np.zeros((1, X.shape[1])), np.zeros(1))
     model = LogisticRegression(C=C, max_iter=2000, random_state=seed)
-    model.fit((X - mean) / scale, y)
+    model.fit(np.clip((X - mean) / scale, -CLIP_SIGMA, CLIP_SIGMA), y)
     return Head(feature, [str(c) for c in model.classes_], mean, scale, model.coef_, model.intercept_)
 
 
@@ -59,8 +74,12 @@ def save_heads(heads: list[Head], folder: Path, meta: dict) -> None:
         for part in ("mean", "scale", "weight", "bias"):
             arrays[f"{h.feature}.{part}"] = getattr(h, part).astype(np.float32)
     np.savez_compressed(folder / "heads.npz", **arrays)
+    clips = {h.clip for h in heads}
+    if len(clips) > 1:
+        raise ValueError(f"heads clipped differently ({sorted(clips, key=str)}) cannot share one model folder")
+    clip = {"clip_sigma": clips.pop()} if heads and None not in clips else {}
     (folder / "heads.json").write_text(json.dumps(
-        dict(meta, heads={h.feature: h.classes for h in heads}), indent=2))
+        dict(meta, **clip, heads={h.feature: h.classes for h in heads}), indent=2))
 
 
 def load_heads(folder: Path) -> tuple[list[Head], dict]:
@@ -70,6 +89,7 @@ def load_heads(folder: Path) -> tuple[list[Head], dict]:
                                 "train one with `isu-validate reference train`")
     meta = json.loads(meta_path.read_text())
     with np.load(array_path) as arrays:
-        heads = [Head(f, classes, *(arrays[f"{f}.{p}"].astype(np.float64) for p in ("mean", "scale", "weight", "bias")))
+        heads = [Head(f, classes, *(arrays[f"{f}.{p}"].astype(np.float64) for p in ("mean", "scale", "weight", "bias")),
+                      clip=meta.get("clip_sigma"))
                  for f, classes in meta["heads"].items()]
     return heads, meta

@@ -22,7 +22,7 @@ from ..progress import Progress
 from ..space import SceneSpace
 from .backbone import Backbone, read_rgb
 from .feature_bank import FILES, FeatureSet, save_bank
-from .heads import Head, fit_head, save_heads
+from .heads import CLIP_SIGMA, REGULARISATION_C, Head, fit_head, save_heads
 from ..errors import InputError
 
 
@@ -216,7 +216,8 @@ def fit_and_describe(space: SceneSpace, train: FeatureSet, held_out: FeatureSet,
             "seed": seed, "render_preset": preset, "held_out": by_preset[preset], "held_out_by_preset": by_preset,
             "held_out_scenes_by_preset": {name: len(scenes) for name, (_, scenes) in
                                           {preset: (None, held_out.scenes), **(others or {})}.items()},
-            "training": accuracy(space, heads, train.features, train.scenes)["per_feature"]}
+            "training": accuracy(space, heads, train.features, train.scenes)["per_feature"],
+            "heads": {"C": REGULARISATION_C, "clip_sigma": CLIP_SIGMA}}
     return heads, card
 
 
@@ -252,8 +253,8 @@ def model_card_markdown(card: dict) -> str:
              "It is imperfect in honest ways: the accuracies below are measured, not planted.", "",
              f"- Backbone: {card['backbone']}, input {card['input_size'][0]}x{card['input_size'][1]}"
              + (f", run on {card['device']}" if card.get("device") else ""),
-             "- Heads: one L2-regularised logistic regression per predicted feature (scikit-learn), "
-             "stored as plain arrays",
+             "- Heads: one L2-regularised logistic regression per predicted feature (scikit-learn)"
+             + _fit_words(card.get("heads")) + ", stored as plain arrays",
              f"- Scene space: {card['space']} (hash {card['space_hash']})",
              f"- Training set: {card['training_scenes']} rendered scenes, balanced per feature, seed {card['seed']}, "
              f"render preset `{card['render_preset']}`",
@@ -279,6 +280,14 @@ def model_card_markdown(card: dict) -> str:
     for p, result in presets.items():
         lines += _by_light(result, f"## Held-out accuracy by external light (preset `{p}`)")
     return "\n".join(lines) + "\n"
+
+
+def _fit_words(fit: dict | None) -> str:
+    """How the heads were fitted; a card from before clipping says nothing (its heads read features unclipped)."""
+    if not fit:
+        return ""
+    return (f" with C {fit['C']}, on standardised features clipped at +-{fit['clip_sigma']:g} training standard "
+            "deviations (a photo's channel counts at most as far as the renders moved it)")
 
 
 def _hidden_lines(hidden: dict | None) -> list[str]:
