@@ -73,6 +73,8 @@ def test_heads_learn_what_is_visible_and_the_card_says_how_well(trained):
     assert set(card["held_out"]["by_external_light"]) <= {"LOW", "MEDIUM", "HIGH"}
     text = (folder / "model" / "MODEL_CARD.md").read_text()
     assert "tshirt_colour" in text and "reference train --n 48" in text
+    assert card["heads"] == {"C": 0.05, "clip_sigma": CLIP_SIGMA} and "clipped at +-3 training standard" in text
+    assert json.loads((folder / "model" / "heads.json").read_text())["clip_sigma"] == CLIP_SIGMA
     assert (folder / "model" / "heads.npz").stat().st_size < 5_000_000
 
 
