@@ -386,7 +386,12 @@ def test_a_trained_recipe_kept_from_another_head_fit_is_refused(tmp_path):
     folder.mkdir()
     before = {k: v for k, v in made.items() if k != "heads"}
     (folder / "recipe.json").write_text(json.dumps(before, sort_keys=True))
-    with pytest.raises(InputError, match=f"head fit.*delete {folder}"):
+    with pytest.raises(InputError, match=f"fitted otherwise.*unclipped.*delete {folder / 'model'} and "
+                                         f"{folder / 'recipe.json'} to fit them again on its renders"):
+        _train(recipe, folder, args)
+    assert not (folder / "model").exists()          # nothing made, nothing rendered
+    (folder / "recipe.json").write_text("{damaged")
+    with pytest.raises(InputError, match=f"other settings, renderer or rig files.*delete {folder} to make it again"):
         _train(recipe, folder, args)
 
 

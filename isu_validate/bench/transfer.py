@@ -146,9 +146,7 @@ def _train(recipe: Recipe, folder: Path, args) -> tuple[Path, Path, str]:
     model = folder / "model"
     stored = (folder / "recipe.json").read_text() if (folder / "recipe.json").is_file() else made
     if stored != made:   # a kept model is reused only for what it was made with: a changed rig file is another recipe
-        raise InputError(f"{folder} holds recipe {recipe.name} made with other settings, renderer, rig files or "
-                         f"head fit ({stored}); choose another --out or recipe name, or delete {folder} to make it "
-                         "again")
+        raise InputError(_kept_elsewise(folder, recipe.name, stored, made))
     folder.mkdir(parents=True, exist_ok=True)
     write_text(folder / "recipe.json", made)
     description = f"{RENDERER_VERSION}, " + ", ".join(f"{k}={v}" for k, v in o.items())
@@ -165,6 +163,23 @@ def _train(recipe: Recipe, folder: Path, args) -> tuple[Path, Path, str]:
     finally:
         renderer.close()
     return model, folder / "held-out", description
+
+
+def _kept_elsewise(folder: Path, name: str, stored: str, made: str) -> str:
+    """Why a recipe folder is refused, and the cheapest way on: a head fit alone is refitted on the kept renders."""
+    def without_fit(text: str) -> dict | None:
+        try:
+            return {k: v for k, v in json.loads(text).items() if k != "heads"}
+        except (ValueError, AttributeError):   # a damaged recipe.json: only the general answer
+            return None
+
+    if without_fit(stored) is not None and without_fit(stored) == without_fit(made):
+        before = json.loads(stored).get("heads", "unclipped")
+        return (f"{folder} holds recipe {name} with heads fitted otherwise ({before}, now {json.loads(made)['heads']}"
+                f"); delete {folder / 'model'} and {folder / 'recipe.json'} to fit "
+                "them again on its renders, or choose another --out or recipe name")
+    return (f"{folder} holds recipe {name} made with other settings, renderer or rig files ({stored}); choose another "
+            f"--out or recipe name, or delete {folder} to make it again")
 
 
 def _measure(args, recipe: Recipe, model: Path, renders: Path | None, out: Path) -> dict:

@@ -4,8 +4,8 @@ Stored as plain arrays (``heads.npz`` + ``heads.json``), so loading needs neithe
 scikit-learn nor pickle: standardise, clip, multiply, softmax.
 
 Why clip: the heads learn from renders, and a real photograph moves some backbone channels far
-beyond anything the renders ever did (4-5% of a photo's standardised values lie past 5 standard
-deviations; the renders' own held-out scenes almost none). Unclipped, those channels carry the
+beyond anything the renders ever did (4-5% of real photos' standardised values lie past 5 standard
+deviations; the renders' own held-out scenes 0.5%). Unclipped, those channels carry the
 answer: a linear head extrapolates, and State Farm's drivers with both hands on the wheel read as
 "phone" with log-odds of 15-20. Clipped at ``CLIP_SIGMA`` training standard deviations, a channel
 counts at most as much as the renders taught it to (docs/MODELS.md, "Reference ISU heads").
