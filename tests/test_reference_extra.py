@@ -86,6 +86,25 @@ def test_extra_retrains_on_the_stored_features_and_compares_on_the_same_held_out
     assert {h.feature for h in heads} == {f.name for f in SPACE.predicted}
 
 
+def test_a_base_fitted_before_clipping_is_named_in_the_card(tmp_path, base, same_backbone):
+    """Retraining a model whose heads read features unclipped: the card says part of each change is the fit."""
+    import shutil
+
+    old = tmp_path / "old"
+    shutil.copytree(base, old)
+    meta = json.loads((old / "heads.json").read_text())
+    del meta["clip_sigma"]
+    (old / "heads.json").write_text(json.dumps(meta))
+    dataset = make_dataset(tmp_path / "ds")
+    for b, out in ((base, tmp_path / "a"), (old, tmp_path / "b")):
+        assert main(["reference", "train", "--extra", str(dataset), "--base", str(b), "--out", str(out),
+                     "--workdir", str(tmp_path / "w")]) == 0
+    assert "unclipped" not in (tmp_path / "a" / "MODEL_CARD.md").read_text()
+    assert json.loads((tmp_path / "b" / "model_card.json").read_text())["base_clip_sigma"] is None
+    assert "the base's were read unclipped, so part of every change below is the fit" in \
+        (tmp_path / "b" / "MODEL_CARD.md").read_text()
+
+
 def content_hash_of(dataset: Path) -> str:
     """The images' bytes and their labels (occluded features left out), as the card should name them."""
     import hashlib

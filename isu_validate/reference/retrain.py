@@ -52,7 +52,7 @@ def retrain_with_extra(space, base: Path, extra: list[ExtraSet], out: Path, rend
     combined = FeatureSet(np.concatenate([train.features, *extra_X]),
                           train.scenes + [scene for part in extra for scene in part.scenes], train.meta)
     heads, card = fit_and_describe(space, combined, held_out, train.meta["seed"])
-    base_heads, _ = load_heads(Path(base))
+    base_heads, base_meta = load_heads(Path(base))
     before = accuracy(space, base_heads, held_out.features, held_out.scenes)["per_feature"]
     card.update(renderer=train.meta["renderer"], base=str(Path(base).resolve()), base_training_scenes=len(train.scenes),
                 extra=[{"dataset": part.source, "content_hash": part.content_hash, "images": len(part.images),
@@ -60,7 +60,7 @@ def retrain_with_extra(space, base: Path, extra: list[ExtraSet], out: Path, rend
                 reproduce=reproduce(space, base, extra, out),
                 comparison=compare(before, card["held_out"]["per_feature"]),
                 embed_seconds=round(embedded - start, 1), fit_seconds=round(time.time() - embedded, 1),
-                device=backbone.device.describe())
+                device=backbone.device.describe(), base_clip_sigma=base_meta.get("clip_sigma"))
     card["change"] = change_summary(card["comparison"])
     write_model(Path(out), heads, card, [combined, held_out], markdown=retrained_markdown)
     return card
@@ -125,6 +125,16 @@ def _runs(runs: list[dict]) -> str:
         for r in runs)
 
 
+def _fit_change(card: dict) -> list[str]:
+    """A base fitted another way (before the heads clipped their features): its share of every change is named."""
+    now, base = card.get("heads", {}).get("clip_sigma"), card.get("base_clip_sigma")
+    if now == base:
+        return []
+    return [f"- Heads: features clipped at +-{now:g} training deviations; the base's were read "
+            + (f"clipped at +-{base:g}" if base is not None else "unclipped")
+            + ", so part of every change below is the fit, not the extra data"]
+
+
 def retrained_markdown(card: dict) -> str:
     lines = ["# Reference ISU retrained with extra data", "",
              f"- Base: `{card['base']}`: {card['base_training_scenes']} training scenes, seed {card['seed']}, "
@@ -137,6 +147,7 @@ def retrained_markdown(card: dict) -> str:
              f"- Backbone: {card['backbone']}, input {card['input_size'][0]}x{card['input_size'][1]}, "
              f"run on {card['device']}",
              f"- Cost: {card['embed_seconds']} s embedding the extra images, {card['fit_seconds']} s fitting",
+             *_fit_change(card),
              f"- Reproduce: `{card['reproduce']}`",
              "", "## Held-out accuracy against the base model (same scenes)", "",
              "| feature | base | retrained | change | n |", "|---|---|---|---|---|"]
