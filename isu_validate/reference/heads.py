@@ -7,7 +7,7 @@ Why clip: the heads learn from renders, and a real photograph moves some backbon
 beyond anything the renders ever did (4-5% of real photos' standardised values lie past 5 standard
 deviations; the renders' own held-out scenes 0.5%). Unclipped, those channels carry the
 answer: a linear head extrapolates, and State Farm's drivers with both hands on the wheel read as
-"phone" with log-odds of 15-20. Clipped at ``CLIP_SIGMA`` training standard deviations, a channel
+"phone" with log-odds up to 21. Clipped at ``CLIP_SIGMA`` training standard deviations, a channel
 counts at most as much as the renders taught it to (docs/MODELS.md, "Reference ISU heads").
 """
 from __future__ import annotations
