@@ -167,17 +167,16 @@ def _train(recipe: Recipe, folder: Path, args) -> tuple[Path, Path, str]:
 
 def _kept_elsewise(folder: Path, name: str, stored: str, made: str) -> str:
     """Why a recipe folder is refused, and the cheapest way on: a head fit alone is refitted on the kept renders."""
-    def without_fit(text: str) -> dict | None:
-        try:
-            return {k: v for k, v in json.loads(text).items() if k != "heads"}
-        except (ValueError, AttributeError):   # a damaged recipe.json: only the general answer
-            return None
-
-    if without_fit(stored) is not None and without_fit(stored) == without_fit(made):
-        before = json.loads(stored).get("heads", "unclipped")
-        return (f"{folder} holds recipe {name} with heads fitted otherwise ({before}, now {json.loads(made)['heads']}"
-                f"); delete {folder / 'model'} and {folder / 'recipe.json'} to fit "
-                "them again on its renders, or choose another --out or recipe name")
+    try:
+        kept = json.loads(stored)
+        fit_only = {k: v for k, v in kept.items() if k != "heads"} == \
+            {k: v for k, v in json.loads(made).items() if k != "heads"}
+    except (ValueError, AttributeError):   # a damaged recipe.json: only the general answer
+        fit_only = False
+    if fit_only:
+        return (f"{folder} holds recipe {name} with heads fitted otherwise ({kept.get('heads', 'unclipped')}, now "
+                f"{json.loads(made)['heads']}); delete {folder / 'model'} and {folder / 'recipe.json'} to fit them "
+                "again on its renders, or choose another --out or recipe name")
     return (f"{folder} holds recipe {name} made with other settings, renderer or rig files ({stored}); choose another "
             f"--out or recipe name, or delete {folder} to make it again")
 

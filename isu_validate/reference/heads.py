@@ -24,6 +24,12 @@ REGULARISATION_C = 0.05   # inverse L2 strength of every head's logistic regress
 CLIP_SIGMA = 3.0          # standardised features are clipped to +-3 training standard deviations
 
 
+def standardise(features: np.ndarray, mean: np.ndarray, scale: np.ndarray, clip: float | None) -> np.ndarray:
+    """(features - mean) / scale, clipped to +-clip (None: unclipped); fitting and reading both go through here."""
+    z = (features - mean) / scale
+    return z if clip is None else np.clip(z, -clip, clip)
+
+
 @dataclass
 class Head:
     feature: str
@@ -35,8 +41,7 @@ class Head:
     clip: float | None = CLIP_SIGMA   # None: a model fitted before clipping (heads.json without clip_sigma)
 
     def standardise(self, features: np.ndarray) -> np.ndarray:
-        z = (features - self.mean) / self.scale
-        return z if self.clip is None else np.clip(z, -self.clip, self.clip)
+        return standardise(features, self.mean, self.scale, self.clip)
 
     def probabilities(self, features: np.ndarray) -> np.ndarray:
         if len(self.classes) == 1:
@@ -63,7 +68,7 @@ def fit_head(feature: str, X: np.ndarray, y: list[str], C: float = REGULARISATIO
     if len(classes) == 1:
         return Head(feature, classes, mean, scale, np.zeros((1, X.shape[1])), np.zeros(1))
     model = LogisticRegression(C=C, max_iter=2000, random_state=seed)
-    model.fit(np.clip((X - mean) / scale, -CLIP_SIGMA, CLIP_SIGMA), y)
+    model.fit(standardise(X, mean, scale, CLIP_SIGMA), y)
     return Head(feature, [str(c) for c in model.classes_], mean, scale, model.coef_, model.intercept_)
 
 
