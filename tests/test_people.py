@@ -94,6 +94,23 @@ def test_seated_driver_clears_seat_and_wheel_holds_wheel_or_phone_and_wears_the_
     assert m["belt_diagonal_resting"] > 0.5 and m["belt_lap_resting"] > 0.3, (key, m)
 
 
+def test_the_wheel_leans_as_a_real_one_its_face_up_to_the_driver_and_the_grips_stay_at_ten_and_two():
+    """The rim's top lies further from the driver than its bottom and its face turns up to the chest, so a
+    camera beside the car and above the rim sees its face (isu-blender-12 had it mirrored); the grips are
+    where the mirrored wheel had them in x (the arms reach as far), 5 cm higher so that the rim clears the knees."""
+    from capture.camera import load_camera
+    from isu_validate.render.cabin_geometry import rim_point, wheel_frame
+    wheel = load_cabin("default")["steering_wheel"]
+    centre, _, up, normal = wheel_frame(wheel)
+    top, bottom = centre + up * wheel["radius"], centre - up * wheel["radius"]
+    assert top[0] > bottom[0] + 0.1 and normal[0] < 0 < normal[2]      # cabin +x is forward, towards the dash
+    side_camera = load_camera("passenger-side").t
+    assert (side_camera - centre) @ normal > 0.1 * np.linalg.norm(side_camera - centre)
+    for clock in (30.0, 150.0):
+        point, _, _ = rim_point(wheel, clock)
+        assert point[0] == pytest.approx(0.50 - 0.185 * 0.5 * np.sin(np.radians(28)), abs=0.001)
+
+
 def test_expression_moves_only_the_face(people):
     happy = _load(people.driver_state("MALE", "H2", "W2", "HAPPY", "P6"))
     serious = _load(people.driver_state("MALE", "H2", "W2", "SERIOUS", "P6"))

@@ -164,10 +164,12 @@ def seat_boxes(name: str, seat: dict) -> list[Box]:
 
 
 def wheel_frame(wheel: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(centre, lateral axis, up-in-rim-plane axis, normal towards the driver) of the steering wheel."""
+    """(centre, lateral axis, up-in-rim-plane axis, normal towards the driver) of the steering wheel.
+    As in a real car, the rim's top leans away from the driver (``tilt_deg`` from vertical) and its face
+    turns up towards the chest; seen from beside the car, its face shows as an open ring."""
     tilt = math.radians(wheel["tilt_deg"])
     return (np.asarray(wheel["centre"], float), np.array([0.0, 1.0, 0.0]),
-            np.array([-math.sin(tilt), 0.0, math.cos(tilt)]), np.array([-math.cos(tilt), 0.0, -math.sin(tilt)]))
+            np.array([math.sin(tilt), 0.0, math.cos(tilt)]), np.array([-math.cos(tilt), 0.0, math.sin(tilt)]))
 
 
 def wheel_solids(wheel: dict) -> list:

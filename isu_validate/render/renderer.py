@@ -47,7 +47,10 @@ from .worker import BlenderWorker, WorkerCrashed, WorkerFailed, WorkerTimeout
 # 11 (issue 44): draft denoises with its guides unfiltered (OIDN prefilter NONE): faces at night no longer wash out
 # 12 (issue 44): the view outside as bright as the light the windows let in (MEDIUM x4.8, HIGH x16), the sky seen
 # by camera rays alone
-RENDERER_VERSION = "isu-blender-12"
+# 13 (issue 44): the steering wheel leans as a real one does (the rim's top away from the driver, its face up to the
+# chest; it leaned the other way), its centre moved so that the grips at ten and two stay where they were along the car
+# (5 cm higher: the rim clears the knees); the belt rests on cloth the rays that lift it missed
+RENDERER_VERSION = "isu-blender-13"
 
 # what the worker shows for a feature the scene space does not have (or that is inactive)
 DEFAULTS = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height": "H2", "driver_weight": "W2",

@@ -247,13 +247,19 @@ def dress(garment: Garment, vertices: np.ndarray, faces: np.ndarray, normals: np
 
 
 _REACH = 0.06     # the thickest cloth a strap is lifted onto (m): nothing farther above it is under it
+_GRAZE = 0.01     # a strap point this far into other cloth (a sleeve beside the chest) rests on it instead
 
 
-def lift_straps(state: dict, cloth: list[tuple[np.ndarray, np.ndarray]]) -> dict:
+def lift_straps(state: dict, cloth: list[tuple[np.ndarray, np.ndarray]],
+                grazed: list[tuple[np.ndarray, np.ndarray]] = ()) -> dict:
     """The belt's straps (laid on the skin by ``belt.py``) lifted onto the clothes: each point of a strap
     rises along its normal until its underside clears the topmost cloth under it (a ray cast down onto
     every garment), and the strap stays taut over what lifts it (it spans an open jacket's front instead of
-    dipping into it); the anchored ends stay. ``cloth``: each garment's (vertices, triangles) as placed."""
+    dipping into it); the anchored ends stay. Then a point the rays missed (cloth under a slanting strap, a
+    sleeve beside the chest), nearer any cloth than half the strap's thickness or up to ``_GRAZE`` into it,
+    rests on it; one deeper lies under it (an arm in front of the strap), as it does. ``cloth``: each
+    garment's (vertices, triangles) as placed over the belt's carriers; ``grazed``: the rest of it, which the
+    strap only touches."""
     import trimesh
     from .belt import THICKNESS, WIDTH
     offsets = np.cumsum([0] + [len(v) for v, _ in cloth])
@@ -274,8 +280,24 @@ def lift_straps(state: dict, cloth: list[tuple[np.ndarray, np.ndarray]]) -> dict
         lift[[0, -1]] = 0.0
         for _ in range(30):     # taut: no point lower than the mean of its neighbours (a string over its supports)
             lift[1:-1] = np.maximum(lift[1:-1], (lift[:-2] + lift[2:]) / 2)
-        out[strap] = (points + normals * lift[:, None]).astype(np.float32)
+        lifted = points + normals * lift[:, None]
+        for _ in range(3):        # resting on one cloth may bring a point nearer another one
+            for vertices, triangles in [*cloth, *grazed]:
+                lifted[1:-1] = _rest_on(lifted[1:-1], vertices, triangles, THICKNESS / 2 + 0.001)
+        out[strap] = lifted.astype(np.float32)
         out[f"{strap}_normals"] = normals.astype(np.float32)
+    return out
+
+
+def _rest_on(points: np.ndarray, vertices: np.ndarray, triangles: np.ndarray, height: float) -> np.ndarray:
+    """Points nearer a cloth than ``height`` (or up to ``_GRAZE`` into it), straight over one of its triangles,
+    moved out to ``height`` above it along its normal."""
+    from .surface import Surface
+    q, n, d = Surface(vertices, triangles).closest(points)
+    square = np.abs(((points - q) * n).sum(axis=1)) >= 0.95 * np.linalg.norm(points - q, axis=1)
+    touching = (d < height) & (d > -_GRAZE) & square
+    out = points.copy()
+    out[touching] = q[touching] + n[touching] * height
     return out
 
 

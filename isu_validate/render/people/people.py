@@ -212,17 +212,19 @@ def _dressed(outfit: dict, topo: dict, state: dict) -> dict:
     and the belt straps lifted onto the clothes."""
     v, faces = state["vertices"].astype(np.float64), topo["faces"]
     normals = hair.vertex_normals(v, faces)
-    out, placed = {}, []
+    out, placed, grazed = {}, [], []
     for slot in [*map(str, outfit["slots"]), "cap", "band"]:
         g = garments.Garment.from_arrays(outfit, slot)
         out[f"{slot}_co"], out[f"{slot}_crumple"] = garments.dress(g, v, faces, normals)
         if slot not in ("cap", "band"):
-            # the belt lies on the cloth over the torso, pelvis and thighs only (as on the skin: belt.py)
+            # the belt lies on the cloth over the torso, pelvis and thighs (as on the skin: belt.py) and
+            # only touches the rest (a sleeve beside the chest)
             carried = topo["carriers"][g.i][g.faces].all(axis=1) & ~g.band
             placed.append((out[f"{slot}_co"], g.faces[carried]))
+            grazed.append((out[f"{slot}_co"], g.faces[~carried & ~g.band]))
     out.update({f"{name}_co": co for name, co in accessories.place(outfit, v).items()})
     if "belt_diagonal" in state:
-        out.update(garments.lift_straps(state, placed))
+        out.update(garments.lift_straps(state, placed, grazed))
     return out
 
 

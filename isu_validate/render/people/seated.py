@@ -14,8 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..cabin_geometry import (CAN_RADIUS, PHONE_SIZE, RIM_TUBE, can_cylinder, phone_box, rim_point, seat_boxes,
-                              wheel_frame)
+from ..cabin_geometry import CAN_RADIUS, PHONE_SIZE, RIM_TUBE, can_cylinder, phone_box, rim_point, seat_boxes
 from .hands import FINGERS, HandFrame, close_on, hand_frame, turn_to, wrap
 from .limbs import Limb, reach
 from .regions import bone_weights
@@ -30,6 +29,9 @@ CAN_ALONG = 0.7                        # a held can's axis crosses the hand this
 PALM_HALF = 0.014                      # from the hand's axis to the palm's surface (m)
 GRIP_PALM = 0.036                      # the hand's axis this far off the rim's surface (m)
 GRIP_ALONG = 0.55                      # the rim crosses the hand this far from wrist to knuckles
+# the forearm comes to the rim from below and behind, rising this steeply (forward and up in the cabin frame):
+# elbows low, as drivers hold a wheel whose face turns up to them
+FOREARM_RISE = np.array([math.cos(math.radians(50.0)), 0.0, math.sin(math.radians(50.0))])
 SKIN_GAP = 0.016                       # finger joints wrap this far outside the rim (half a finger's thickness)
 ANKLE_HEIGHT = 0.11      # ankle joints above the floor (heels on it)
 PEDAL_X = 0.56           # feet no further forward than the pedals (the footwell ends at the dashboard)
@@ -205,8 +207,7 @@ def _wheel_grip(rest: Posed, side: str, rig: dict) -> Grip:
     """A fist round the rim at ten (left hand) or two (right hand): the knuckle line along the rim,
     the palm against its outer side, fingers wrapping to the front (closed round it by ``wrap``)."""
     point, tangent, radial = rim_point(rig["steering_wheel"], GRIP_CLOCK[side])
-    _, _, _, normal = wheel_frame(rig["steering_wheel"])
-    a = _unit(-normal * 0.75 - radial * 0.35)          # from the wrist over the rim towards the dashboard
+    a = _unit(FOREARM_RISE * 0.75 - radial * 0.35)      # from the wrist up over the rim towards the dashboard
     a = _unit(a - tangent * (a @ tangent))
     p = _unit(np.cross(a, tangent))
     if p @ (-radial) < 0:                               # the palm faces the wheel's centre
