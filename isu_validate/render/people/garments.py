@@ -262,6 +262,8 @@ def lift_straps(state: dict, cloth: list[tuple[np.ndarray, np.ndarray]],
     strap only touches."""
     import trimesh
     from .belt import THICKNESS, WIDTH
+    from .surface import Surface
+    touched = [Surface(vertices, triangles) for vertices, triangles in [*cloth, *grazed]]   # built once, both straps
     offsets = np.cumsum([0] + [len(v) for v, _ in cloth])
     mesh = trimesh.Trimesh(np.concatenate([v for v, _ in cloth]).astype(np.float64),
                            np.concatenate([f + o for (_, f), o in zip(cloth, offsets)]), process=False)
@@ -282,18 +284,17 @@ def lift_straps(state: dict, cloth: list[tuple[np.ndarray, np.ndarray]],
             lift[1:-1] = np.maximum(lift[1:-1], (lift[:-2] + lift[2:]) / 2)
         lifted = points + normals * lift[:, None]
         for _ in range(3):        # resting on one cloth may bring a point nearer another one
-            for vertices, triangles in [*cloth, *grazed]:
-                lifted[1:-1] = _rest_on(lifted[1:-1], vertices, triangles, THICKNESS / 2 + 0.001)
+            for surface in touched:
+                lifted[1:-1] = _rest_on(lifted[1:-1], surface, THICKNESS / 2 + 0.001)
         out[strap] = lifted.astype(np.float32)
         out[f"{strap}_normals"] = normals.astype(np.float32)
     return out
 
 
-def _rest_on(points: np.ndarray, vertices: np.ndarray, triangles: np.ndarray, height: float) -> np.ndarray:
-    """Points nearer a cloth than ``height`` (or up to ``_GRAZE`` into it), straight over one of its triangles,
-    moved out to ``height`` above it along its normal."""
-    from .surface import Surface
-    q, n, d = Surface(vertices, triangles).closest(points)
+def _rest_on(points: np.ndarray, cloth, height: float) -> np.ndarray:
+    """Points nearer a cloth (a ``Surface``) than ``height`` (or up to ``_GRAZE`` into it), straight over one of
+    its triangles, moved out to ``height`` above it along its normal."""
+    q, n, d = cloth.closest(points)
     square = np.abs(((points - q) * n).sum(axis=1)) >= 0.95 * np.linalg.norm(points - q, axis=1)
     touching = (d < height) & (d > -_GRAZE) & square
     out = points.copy()
