@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from isu_validate.render.cabin import load_cabin
+from isu_validate.render.cabin_geometry import CAN_HEIGHT, DRINK_PROFILES, drink_solid
 from isu_validate.render.people import People, PeopleStore
 from isu_validate.render.people import people as people_module
 from isu_validate.render.people.checks import child_measures, driver_measures
@@ -263,7 +264,7 @@ def test_eyes_teeth_and_hair_styles_are_where_a_face_has_them(people, model):
 
 
 @pytest.mark.parametrize("hands, phone", [("LAP", "NONE"), ("HAIR", "NONE"), ("LAP", "P3"), ("DRINK", "NONE"),
-                                         ("TEMPLE", "NONE")])
+                                         ("DRINK_LOW", "NONE"), ("TEMPLE", "NONE")])
 def test_a_free_hand_leaves_the_wheel_for_its_rig_position_and_a_phone_in_that_hand_wins(people, hands, phone):
     """isu-diverse's driver_hands: one hand off the wheel at the rig's point, the other still on the rim, the
     body clear of seat and wheel; a phone held in the same hand takes the hand (LAP + P3: reading)."""
@@ -301,6 +302,44 @@ def test_a_can_held_to_drink_lies_in_the_closed_hand_its_top_at_the_lips(people,
     axis = state["can_rotation"][:, 2]
     assert axis[2] > 0.5 and axis[0] < -0.3, f"the can's top is not tipped back towards the face: {axis}"
     np.testing.assert_allclose(state["can_rotation"].T @ state["can_rotation"], np.eye(3), atol=1e-5)
+
+
+@pytest.mark.parametrize("gender, height, weight", [("MALE", "H2", "W2"), ("FEMALE", "H1", "W1"), ("MALE", "H4", "W4")])
+def test_every_drink_sits_in_the_hand_that_holds_the_can_and_clears_the_face(people, gender, height, weight):
+    """isu-diverse's `drink`: cups, a bottle and a mug held where the can is (one grip), at the mouth (DRINK) and
+    below the chin (DRINK_LOW, upright): none cuts into the face or body, the fingers press into none more than
+    into the can, and each touches the hand."""
+    topology = _load(people.topology("male" if gender == "MALE" else "female"))
+    hand = topology["hands"].astype(bool)
+    for hands in ("DRINK", "DRINK_LOW"):
+        state = _load(people.driver_state(gender, height, weight, "SERIOUS", "NONE", None, hands))
+        v = state["vertices"].astype(float)
+        for kind in DRINK_PROFILES:
+            solid = drink_solid(kind, state["can_centre"], state["can_rotation"])
+            body, fingers = solid.sdf(v[~hand]).min(), solid.sdf(v[hand]).min()
+            assert body > -0.002, f"{hands} {kind}: cuts {-body * 1000:.1f} mm into the body"
+            assert -0.009 < fingers < 0.0, f"{hands} {kind}: the hand reaches {fingers * 1000:.1f} mm into it"
+        if hands == "DRINK_LOW":
+            axis = state["can_rotation"][:, 2]
+            assert axis[2] > 0.8, f"the drink below the chin is not upright: {axis}"
+            assert state["can_centre"][2] < state["head_centre"][2] - 0.15, "the drink is not below the chin"
+
+
+def test_a_drinks_distance_is_exact_for_a_solid_of_revolution_with_a_hollow():
+    """The outline's signed distance: a plain cylinder's agrees with Cylinder's; the hollow over a cup's coffee
+    is outside, the cup's wall inside; the axis is no surface."""
+    from isu_validate.render.cabin_geometry import Cylinder, Lathe
+    axis = np.array([0.0, 0.6, 0.8])
+    side = np.cross(axis, [1.0, 0.0, 0.0])
+    side /= np.linalg.norm(side)
+    solid = Lathe("tin", np.zeros(3), axis, ((0.0, 0.0), (0.03, 0.0), (0.03, 0.1), (0.0, 0.1)))
+    tin = Cylinder("tin", np.zeros(3), axis, 0.03, 0.1)
+    points = np.random.default_rng(3).uniform(-0.15, 0.15, (2000, 3))
+    np.testing.assert_allclose(solid.sdf(points), tin.sdf(points), atol=1e-12)
+    cup = drink_solid("CUP", np.zeros(3), np.eye(3))     # its base at z = -CAN_HEIGHT / 2
+    base = -CAN_HEIGHT / 2
+    d = cup.sdf(np.array([[0, 0, base + 0.095], [0, 0, base + 0.05], [0.0375, 0, base + 0.1015], [0.06, 0, 0]]))
+    assert d[0] > 0 and d[1] < -0.02 and d[2] < 0 and d[3] > 0.02, d
 
 
 def test_the_cans_distance_is_exact_on_its_side_its_caps_and_round_its_rims():

@@ -41,7 +41,8 @@ def test_a_free_hand_moves_the_arm_and_a_read_screen_is_lit_and_black_when_off(t
 
     from isu_validate.render import open_renderer
     from isu_validate.render.labels import INSTANCE_ID
-    variants = {"wheel": {}, "lap": {"driver_hands": "LAP"}, "drink": {"driver_hands": "DRINK"},
+    variants = {"wheel": {}, "lap": {"driver_hands": "LAP"}, "drink": {"driver_hands": "DRINK", "drink": "CAN"},
+                "cup": {"driver_hands": "DRINK_LOW", "drink": "WHITE_CUP"},
                 "read_by_use": {"phone_position": "P9"}, "read_off": {"phone_position": "P9", "phone_screen": "OFF"}}
     frames = {}
     with open_renderer("draft", space="isu-diverse", channels=("seg",), log_dir=tmp_path / "logs") as r:
@@ -57,6 +58,10 @@ def test_a_free_hand_moves_the_arm_and_a_read_screen_is_lit_and_black_when_off(t
     can = INSTANCE_ID["colacan_in_hand"]
     assert (frames["drink"][1] == can).sum() >= 50 and not (wheel_seg == can).any()
     assert not (frames["drink"][1] == INSTANCE_ID["colacan_codriver_seat"]).any()
+    # a white cup held below the chin: the same instance, white where the can is red
+    cup_pixels, can_pixels = frames["cup"][0][frames["cup"][1] == can], frames["drink"][0][frames["drink"][1] == can]
+    assert len(cup_pixels) >= 50 and not (frames["cup"][1] == INSTANCE_ID["colacan_codriver_seat"]).any()
+    assert cup_pixels.min(axis=1).mean() > can_pixels.min(axis=1).mean() + 40, "the cup is no whiter than the can"
     # texting down by the console: the camera sees the screen, lit by default and black glass when OFF (on the
     # lap, P5, the rim of a wheel that leans as a real one does hides it from this camera)
     (lit, seg), (dark, _) = frames["read_by_use"], frames["read_off"]

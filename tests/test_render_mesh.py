@@ -1,6 +1,6 @@
 """Meshes the Blender worker builds, checked in real Blender (bpy in a subprocess): a surface of
 revolution through points on its axis is closed, with no coincident vertices and no zero-area faces
-(a pole is one vertex, not a ring of them)."""
+(a pole is one vertex, not a ring of them): the bottle, every drink a hand holds and the parts they are built of."""
 from __future__ import annotations
 
 import json
@@ -14,9 +14,18 @@ pytestmark = pytest.mark.blender
 _LATHE = """
 import json, bpy, bmesh
 from isu_validate.render.blender import mesh as M
-from isu_validate.render.blender.objects import _BOTTLE, _CAN
+from isu_validate.render.blender.objects import _BOTTLE, DRINKS, _band, _split_profile
+from isu_validate.render.cabin_geometry import DRINK_PROFILES
+profiles = [("bottle", _BOTTLE), ("tube", [(0.02, 0.0), (0.02, 0.1)])]
+profiles += [(kind.lower(), list(profile)) for kind, profile in DRINK_PROFILES.items()]
+for kind, drink in DRINKS.items():     # the drinks as built: body and lid apart, the sleeve or label
+    if drink.lid is not None:
+        below, above = _split_profile(list(DRINK_PROFILES[drink.shape]), drink.lid_from)
+        profiles += [(kind + "_body", below), (kind + "_lid", above)]
+    if drink.band is not None:
+        profiles.append((kind + "_band", _band(DRINK_PROFILES[drink.shape], *drink.band[0], 0.0008)))
 out = {}
-for name, profile in (("bottle", _BOTTLE), ("can", _CAN), ("tube", [(0.02, 0.0), (0.02, 0.1)])):
+for name, profile in profiles:
     me = M.lathe("test_" + name, profile, 16)
     bm = bmesh.new()
     bm.from_mesh(me)

@@ -89,6 +89,33 @@ class Cylinder:
         return outside + np.minimum(np.maximum(radial, along), 0.0)
 
 
+@dataclass(frozen=True)
+class Lathe:
+    """A solid of revolution: the (radius, height) ``profile`` (from the axis at the base round to the axis
+    at the top) turned round ``axis`` from ``base``: a drink in the hand."""
+    name: str
+    base: np.ndarray
+    axis: np.ndarray
+    profile: tuple
+
+    def sdf(self, points: np.ndarray) -> np.ndarray:
+        """Signed distance to the profile's outline in each point's (radius, height) half-plane (the axis is no
+        surface): exact for a solid of revolution; negative inside."""
+        h, off = _along_and_off(points, self.base, self.axis)
+        q = np.stack([off, h], axis=-1)[:, None, :]                  # points x 1 x 2
+        a = np.asarray(self.profile[:-1], float)[None]               # 1 x edges x 2
+        b = np.asarray(self.profile[1:], float)[None]
+        ab = b - a
+        t = np.clip(((q - a) * ab).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-18), 0.0, 1.0)
+        distance = np.linalg.norm(q - (a + t[..., None] * ab), axis=-1).min(axis=1)
+        # inside: a ray from the point outwards in radius crosses the outline an odd number of times
+        za, zb = a[..., 1], b[..., 1]
+        spans = (za <= q[..., 1]) != (zb <= q[..., 1])
+        r_cross = a[..., 0] + (q[..., 1] - za) / np.where(zb == za, 1.0, zb - za) * ab[..., 0]
+        inside = ((spans & (r_cross > q[..., 0])).sum(axis=1) % 2) == 1
+        return np.where(inside, -distance, distance)
+
+
 def rot_y(angle_rad: float) -> np.ndarray:
     c, s = math.cos(angle_rad), math.sin(angle_rad)
     return np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
@@ -110,6 +137,34 @@ def can_cylinder(centre, R) -> Cylinder:
     """The can held at ``centre`` (its middle), its axis (base to top) along ``R``'s local z."""
     axis = np.asarray(R, float)[:, 2]
     return Cylinder("can", np.asarray(centre, float) - axis * CAN_HEIGHT / 2, axis, CAN_RADIUS, CAN_HEIGHT)
+
+
+# The drinks a hand holds (isu-diverse's `drink`): (radius, height) outlines in the can's frame (its base at 0,
+# its top at CAN_HEIGHT), each about the can's radius where the hand closes round the can's middle, so that one
+# grip (``can_cylinder``) holds them all. A cup's rim is wider than a can's top and a bottle reaches lower: the
+# tests measure each against the face it is held to (tests/test_people.py).
+DRINK_PROFILES = {
+    "CAN": ((0.0, 0.004), (0.026, 0.0), (0.031, 0.003), (CAN_RADIUS, 0.010), (CAN_RADIUS, 0.104), (0.0295, 0.113),
+            (0.0285, CAN_HEIGHT), (0.0, CAN_HEIGHT)),
+    # a 240 ml paper or foam cup: tapered, a rolled rim, the coffee 1.5 cm below it
+    "CUP": ((0.0, 0.010), (0.0255, 0.008), (0.0385, 0.100), (0.0400, 0.101), (0.0400, 0.104), (0.0375, 0.105),
+            (0.0360, 0.098), (0.0345, 0.088), (0.0, 0.088)),
+    # the same cup under a take-away lid with a raised sipping rim
+    "COFFEE": ((0.0, 0.010), (0.0255, 0.008), (0.0385, 0.100), (0.0405, 0.101), (0.0405, 0.106), (0.0340, 0.109),
+               (0.0320, 0.113), (0.0, 0.113)),
+    # a 500 ml water bottle held round its upper body: the cap at the lips, the rest below the hand
+    "WATER": ((0.0, -0.066), (0.026, -0.066), (0.0310, -0.060), (0.0310, 0.072), (0.0270, 0.086), (0.0160, 0.096),
+              (0.0125, 0.099), (0.0125, 0.102), (0.0150, 0.102), (0.0150, 0.116), (0.0, 0.116)),
+    # a steel travel mug under a black lid with its sipping spout
+    "MUG": ((0.0, -0.050), (0.0295, -0.050), (0.0335, -0.046), (0.0335, 0.092), (0.0350, 0.094), (0.0350, 0.106),
+            (0.0300, 0.112), (0.0, 0.113)),
+}
+
+
+def drink_solid(kind: str, centre, R) -> Lathe:
+    """The drink ``kind`` held as ``can_cylinder`` holds the can (its middle at ``centre``, its top along R's z)."""
+    axis = np.asarray(R, float)[:, 2]
+    return Lathe(kind, np.asarray(centre, float) - axis * CAN_HEIGHT / 2, axis, DRINK_PROFILES[kind])
 
 
 CARRIER_RECLINE_DEG = 35.0   # the rear-facing carrier's back plate, from the horizontal

@@ -50,6 +50,8 @@ from .worker import BlenderWorker, WorkerCrashed, WorkerFailed, WorkerTimeout
 # 13 (issue 44): the steering wheel leans as a real one does (the rim's top away from the driver, its face up to the
 # chest; it leaned the other way), its centre moved so that the grips at ten and two stay where they were along the car
 # (5 cm higher: the rim clears the knees); the belt rests on cloth the rays that lift it missed
+# later (issue 44) driver_hands DRINK_LOW (a drink held below the chin) and `drink` (cups, a bottle, a mug besides the
+# can): new values that change no earlier scene's frame, so no bump
 RENDERER_VERSION = "isu-blender-13"
 
 # what the worker shows for a feature the scene space does not have (or that is inactive)
@@ -68,7 +70,7 @@ DEFAULTS = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height
             "driver_jacket_colour": "BLACK", "driver_trousers_colour": "NAVY", "driver_eyewear": "NONE",
             "driver_cap": "NO", "driver_watch": "NO",
             # what the hands do besides holding a phone (isu-diverse varies it; isu-paper: both on the wheel)
-            "driver_hands": "WHEEL",
+            "driver_hands": "WHEEL", "drink": "CAN",
             # the phone in the hand: lit while read, dark at the ear in a call (isu-diverse: also always on or off)
             "phone_screen": "BY_USE"}
 

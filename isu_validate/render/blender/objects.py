@@ -1,16 +1,18 @@
 """Objects: the child seat (front- or rear-facing; the child in it is an anny body, see people.py), the
-suitcase, the phone in the driver's hand, and the phone, cola can and cola bottle lying on the co-driver
-seat (each its own render instance). Each is built the first time a scene needs it (never for scenes that
-do not), then only shown, hidden, moved or recoloured."""
+suitcase, the phone in the driver's hand, what the driver drinks from (the can, cups, a bottle, a mug), and
+the phone, cola can and cola bottle lying on the co-driver seat (each its own render instance). Each is built
+the first time a scene needs it (never for scenes that do not), then only shown, hidden, moved or recoloured."""
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from typing import Callable
 
 import bpy
 import numpy as np
 from mathutils import Matrix, Vector
 
-from ..cabin_geometry import CAN_HEIGHT, CAN_RADIUS, CHILD_SEAT_PADS, PHONE_SIZE, child_seat_boxes, pitch
+from ..cabin_geometry import CAN_HEIGHT, CHILD_SEAT_PADS, DRINK_PROFILES, PHONE_SIZE, child_seat_boxes, pitch
 from ..labels import INSTANCE_ID
 from .. import product_art as art
 from . import materials
@@ -189,11 +191,6 @@ def build_cola_bottle(coll, instance: str) -> Group:
     return g
 
 
-# a 330 ml can: domed base, body, necked top
-_CAN = [(0.0, 0.004), (0.026, 0.0), (0.031, 0.003), (CAN_RADIUS, 0.010), (CAN_RADIUS, 0.104), (0.0295, 0.113),
-        (0.0285, CAN_HEIGHT), (0.0, CAN_HEIGHT)]
-
-
 def build_can(coll, instance: str) -> Group:
     """A 330 ml cola can from its base (origin) along local +z, 0.116 m tall and 0.066 m across: the
     printed label on the aluminium body, silver base and top with a rim and a ring-pull tab."""
@@ -202,12 +199,74 @@ def build_can(coll, instance: str) -> Group:
     silver = M.material("can_metal", (0.62, 0.62, 0.64), roughness=0.18, metallic=1.0)
     label = M.image_material("can_label", art.cola_label, "cylinder", roughness=0.28, metallic=0.45,
                              image="cola_label")
-    g.add(M.new_object("can_body", M.lathe("cola_can", _CAN, 40), silver, coll, pid))
+    g.add(M.new_object("can_body", M.lathe("cola_can", DRINK_PROFILES["CAN"], 40), silver, coll, pid))
     sleeve = g.add(M.new_object("can_label", M.unit_cylinder(40, cap=False), label, coll, pid))
     sleeve.location, sleeve.scale = (0, 0, 0.010), (0.0332, 0.0332, 0.094)
     rim = g.add(M.new_object("can_rim", M.unit_torus(1.0, 0.06), silver, coll, pid))
     rim.location, rim.scale = (0, 0, 0.116), (0.0275, 0.0275, 0.0275)
     g.add(M.box("can_tab", (0.008, 0, 0.1166), (0.019, 0.011, 0.0008), silver, coll, pid, rounded=0.4))
+    return g
+
+
+def _band(profile, z0: float, z1: float, out: float):
+    """A closed ring standing ``out`` off the outline between heights z0 and z1 (a sleeve, a label)."""
+    def r(z):
+        for (r0, h0), (r1, h1) in zip(profile, profile[1:]):
+            if h0 <= z <= h1 and h1 > h0:
+                return r0 + (r1 - r0) * (z - h0) / (h1 - h0)
+        raise ValueError(f"height {z} is outside the profile")
+    return [(0.0, z0), (r(z0) + out, z0), (r(z1) + out, z1), (0.0, z1)]
+
+
+@dataclass(frozen=True)
+class Drink:
+    """How a drink other than the can looks: its outline in ``cabin_geometry.DRINK_PROFILES`` and materials
+    (each a function: materials are made inside the worker, on first use)."""
+    shape: str
+    body: Callable
+    lid: Callable | None = None          # a lid or cap of its own material ...
+    lid_from: float | None = None        # ... above this height (m from the can's base)
+    band: tuple | None = None            # ((from, to) heights, material): a sleeve or a label round the body
+
+
+def _paper(colour) -> Callable:
+    return lambda: M.material(f"cup_{'_'.join(f'{c:.2f}' for c in colour)}", colour, roughness=0.55)
+
+
+DRINKS = {
+    "WHITE_CUP": Drink("CUP", _paper((0.80, 0.80, 0.77))),
+    "RED_CUP": Drink("CUP", _paper((0.55, 0.025, 0.02))),
+    "COFFEE": Drink("COFFEE", _paper((0.82, 0.81, 0.78)), lambda: M.material("coffee_lid", (0.02, 0.02, 0.02), 0.35),
+                    0.100, ((0.035, 0.075), _paper((0.40, 0.25, 0.13)))),
+    "WATER": Drink("WATER", lambda: materials.see_through("water_in_pet", (0.015, 0.02, 0.025), (0.90, 0.95, 0.97),
+                                                          0.25, 0.03, 1.0),
+                   lambda: M.material("water_cap", (0.05, 0.18, 0.60), roughness=0.4), 0.102,
+                   ((0.0, 0.050), lambda: M.material("water_label", (0.06, 0.28, 0.62), roughness=0.35))),
+    "MUG": Drink("MUG", lambda: M.material("mug_steel", (0.60, 0.60, 0.62), roughness=0.25, metallic=1.0),
+                 lambda: M.material("mug_lid", (0.015, 0.015, 0.015), roughness=0.4), 0.092),
+}
+
+
+def build_drink(coll, kind: str, instance: str) -> Group:
+    """A drink other than the can (isu-diverse's ``drink``), built in the can's frame (its base at the origin,
+    its top along +z) from ``cabin_geometry.DRINK_PROFILES``, which the hand's grip and the tests share."""
+    drink = DRINKS[kind]
+    g = Group(instance, coll)
+    pid = INSTANCE_ID[instance]
+    profile = DRINK_PROFILES[drink.shape]
+    if drink.lid is None:
+        g.add(M.new_object(f"{kind}_body", M.lathe(f"drink_{drink.shape}", profile, 40), drink.body(), coll, pid))
+    else:
+        below, above = _split_profile(list(profile), drink.lid_from)
+        g.add(M.new_object(f"{kind}_body", M.lathe(f"drink_{drink.shape}_body", below, 40), drink.body(), coll, pid))
+        g.add(M.new_object(f"{kind}_lid", M.lathe(f"drink_{drink.shape}_lid", above, 40), drink.lid(), coll, pid))
+    if drink.band is not None:
+        (z0, z1), mat = drink.band
+        ring = _band(profile, z0, z1, 0.0008)
+        g.add(M.new_object(f"{kind}_band", M.lathe(f"drink_{drink.shape}_band", ring, 40), mat(), coll, pid))
+    if drink.shape == "CUP":     # the coffee seen over the rim
+        g.add(M.cylinder(f"{kind}_coffee", (0, 0, 0.0875), 0.0345, 0.001,
+                         M.material("coffee", (0.06, 0.03, 0.012), roughness=0.15), coll, pid, 40))
     return g
 
 
@@ -245,7 +304,7 @@ class Objects:
         self._child_seat(f)
         self._luggage(f)
         self._phone_in_hand(hand_pose, f.get("phone_screen", "BY_USE"))
-        self._can_in_hand(can_pose)
+        self._drink_in_hand(can_pose, f.get("drink", "CAN"))
         for feature, (part, build) in ON_CODRIVER_SEAT.items():
             self._on_codriver_seat(feature, f.get(feature) == "YES", part, build)
 
@@ -293,13 +352,18 @@ class Objects:
             if obj.name.startswith("phone_screen"):
                 obj.hide_render = not lit
 
-    def _can_in_hand(self, can_pose) -> None:
-        """The can a driver drinks from (isu-diverse's driver_hands DRINK): the seat's can model, its own
-        render instance (not the co-driver seat's can, which is a predicted feature)."""
+    def _drink_in_hand(self, can_pose, kind: str) -> None:
+        """The drink in a driver's hand (isu-diverse's driver_hands DRINK and DRINK_LOW): the seat's can model,
+        or the cup, bottle or mug ``drink`` names, held where the can would be; its own render instance (not the
+        co-driver seat's can, which is a predicted feature)."""
+        key = f"colacan_in_hand:{kind}"
         if can_pose is None:
             self._show_only("colacan_in_hand", None)
             return
-        group = self._group("colacan_in_hand", lambda: build_can(self.coll, "colacan_in_hand"), "colacan")
+        self._show_only("colacan_in_hand", key)
+        build = (lambda: build_can(self.coll, "colacan_in_hand")) if kind == "CAN" else \
+            (lambda: build_drink(self.coll, kind, "colacan_in_hand"))
+        group = self._group(key, build, "colacan" if kind == "CAN" else f"drink_{kind.lower()}")
         centre, R = can_pose
         group.place(Vector((centre - R[:, 2] * CAN_HEIGHT / 2).tolist()),
                     Matrix([list(row) for row in R]).to_euler("XYZ"))

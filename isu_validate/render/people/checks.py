@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..cabin_geometry import can_cylinder, phone_box, seat_boxes, wheel_solids
+from ..cabin_geometry import DRINK_PROFILES, can_cylinder, drink_solid, phone_box, seat_boxes, wheel_solids
 from .seated import shifted_seat
 from .surface import Surface
 
@@ -32,6 +32,10 @@ def driver_measures(state: dict, topology: dict, cabin: dict) -> dict[str, float
         d = can.sdf(v[hands])
         out.update(can_clear_hand=float(d.min()), can_touch=float((d < 0.005).sum()),
                    can_clear_body=float(can.sdf(v[~hands]).min()))
+        # isu-diverse's other drinks, held where the can is: the worst of them
+        drinks = [drink_solid(kind, state["can_centre"], state["can_rotation"]) for kind in DRINK_PROFILES]
+        out.update(drinks_clear_hand=float(min(s.sdf(v[hands]).min() for s in drinks)),
+                   drinks_clear_body=float(min(s.sdf(v[~hands]).min() for s in drinks)))
     return out
 
 
