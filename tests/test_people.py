@@ -13,7 +13,7 @@ from isu_validate.render.cabin import load_cabin
 from isu_validate.render.cabin_geometry import CAN_HEIGHT, DRINK_PROFILES, drink_solid
 from isu_validate.render.people import People, PeopleStore
 from isu_validate.render.people import people as people_module
-from isu_validate.render.people.checks import child_measures, driver_measures
+from isu_validate.render.people.checks import child_measures, driver_measures, drink_measures
 from isu_validate.render.people.phenotype import (BMI_BANDS, HEIGHT_BANDS, child_phenotype, describe_texts,
                                                   measure, measured_table)
 from isu_validate.render.people.store import entry_key
@@ -310,13 +310,12 @@ def test_every_drink_sits_in_the_hand_that_holds_the_can_and_clears_the_face(peo
     below the chin (DRINK_LOW, upright): none cuts into the face or body, the fingers press into none more than
     into the can, and each touches the hand."""
     topology = _load(people.topology("male" if gender == "MALE" else "female"))
-    hand = topology["hands"].astype(bool)
     for hands in ("DRINK", "DRINK_LOW"):
         state = _load(people.driver_state(gender, height, weight, "SERIOUS", "NONE", None, hands))
-        v = state["vertices"].astype(float)
-        for kind in DRINK_PROFILES:
-            solid = drink_solid(kind, state["can_centre"], state["can_rotation"])
-            body, fingers = solid.sdf(v[~hand]).min(), solid.sdf(v[hand]).min()
+        measures = drink_measures(state, topology)
+        assert set(measures) == set(DRINK_PROFILES)
+        for kind, m in measures.items():
+            body, fingers = m["clear_body"], m["clear_hand"]
             assert body > -0.002, f"{hands} {kind}: cuts {-body * 1000:.1f} mm into the body"
             assert -0.009 < fingers < 0.0, f"{hands} {kind}: the hand reaches {fingers * 1000:.1f} mm into it"
         if hands == "DRINK_LOW":

@@ -156,14 +156,20 @@ _BOTTLE = [(0.0, 0.0), (0.030, 0.001), (0.040, 0.006), (0.044, 0.018), (0.044, 0
 _FILL = 0.246    # the cola's level in a full bottle (m above the base): just into the neck, as bottled
 
 
-def _split_profile(profile, z: float):
-    """(the profile below height z, the profile above it), both closed on the axis at z."""
+def _radius_at(profile, z: float) -> float:
+    """The outline's radius at height z, on its outer wall: the first edge from the base that rises through z
+    (at a step exactly at z, the radius just above it: a cap's, not the neck's under it)."""
     for (r0, z0), (r1, z1) in zip(profile, profile[1:]):
         if z0 <= z < z1:
-            edge = (r0 + (r1 - r0) * (z - z0) / (z1 - z0), z)
-            return ([p for p in profile if p[1] < z] + [edge, (0.0, z)],
-                    [(0.0, z), edge] + [p for p in profile if p[1] > z])
+            return r0 + (r1 - r0) * (z - z0) / (z1 - z0)
     raise ValueError(f"height {z} is outside the profile")
+
+
+def _split_profile(profile, z: float):
+    """(the profile below height z, the profile above it), both closed on the axis at z."""
+    edge = (_radius_at(profile, z), z)
+    return ([p for p in profile if p[1] < z] + [edge, (0.0, z)],
+            [(0.0, z), edge] + [p for p in profile if p[1] > z])
 
 
 def build_cola_bottle(coll, instance: str) -> Group:
@@ -210,12 +216,7 @@ def build_can(coll, instance: str) -> Group:
 
 def _band(profile, z0: float, z1: float, out: float):
     """A closed ring standing ``out`` off the outline between heights z0 and z1 (a sleeve, a label)."""
-    def r(z):
-        for (r0, h0), (r1, h1) in zip(profile, profile[1:]):
-            if h0 <= z <= h1 and h1 > h0:
-                return r0 + (r1 - r0) * (z - h0) / (h1 - h0)
-        raise ValueError(f"height {z} is outside the profile")
-    return [(0.0, z0), (r(z0) + out, z0), (r(z1) + out, z1), (0.0, z1)]
+    return [(0.0, z0), (_radius_at(profile, z0) + out, z0), (_radius_at(profile, z1) + out, z1), (0.0, z1)]
 
 
 @dataclass(frozen=True)
@@ -356,14 +357,14 @@ class Objects:
         """The drink in a driver's hand (isu-diverse's driver_hands DRINK and DRINK_LOW): the seat's can model,
         or the cup, bottle or mug ``drink`` names, held where the can would be; its own render instance (not the
         co-driver seat's can, which is a predicted feature)."""
-        key = f"colacan_in_hand:{kind}"
+        self._show_only("colacan_in_hand", None)     # then only the one held shows
         if can_pose is None:
-            self._show_only("colacan_in_hand", None)
             return
-        self._show_only("colacan_in_hand", key)
-        build = (lambda: build_can(self.coll, "colacan_in_hand")) if kind == "CAN" else \
-            (lambda: build_drink(self.coll, kind, "colacan_in_hand"))
-        group = self._group(key, build, "colacan" if kind == "CAN" else f"drink_{kind.lower()}")
+        if kind == "CAN":
+            group = self._group("colacan_in_hand:CAN", lambda: build_can(self.coll, "colacan_in_hand"), "colacan")
+        else:
+            group = self._group(f"colacan_in_hand:{kind}", lambda: build_drink(self.coll, kind, "colacan_in_hand"),
+                                f"drink_{kind.lower()}")
         centre, R = can_pose
         group.place(Vector((centre - R[:, 2] * CAN_HEIGHT / 2).tolist()),
                     Matrix([list(row) for row in R]).to_euler("XYZ"))

@@ -32,10 +32,21 @@ def driver_measures(state: dict, topology: dict, cabin: dict) -> dict[str, float
         d = can.sdf(v[hands])
         out.update(can_clear_hand=float(d.min()), can_touch=float((d < 0.005).sum()),
                    can_clear_body=float(can.sdf(v[~hands]).min()))
-        # isu-diverse's other drinks, held where the can is: the worst of them
-        drinks = [drink_solid(kind, state["can_centre"], state["can_rotation"]) for kind in DRINK_PROFILES]
-        out.update(drinks_clear_hand=float(min(s.sdf(v[hands]).min() for s in drinks)),
-                   drinks_clear_body=float(min(s.sdf(v[~hands]).min() for s in drinks)))
+        drinks = drink_measures(state, topology).values()    # isu-diverse's drinks held there: the worst
+        out.update(drinks_clear_hand=min(d["clear_hand"] for d in drinks),
+                   drinks_clear_body=min(d["clear_body"] for d in drinks))
+    return out
+
+
+def drink_measures(state: dict, topology: dict) -> dict[str, dict[str, float]]:
+    """Per drink of ``cabin_geometry.DRINK_PROFILES`` held where the state's can is: its deepest point into
+    the hand and into the rest of the body (m, negative = inside)."""
+    v = state["vertices"].astype(np.float64)
+    hands = topology["hands"].astype(bool)
+    out = {}
+    for kind in DRINK_PROFILES:
+        solid = drink_solid(kind, state["can_centre"], state["can_rotation"])
+        out[kind] = {"clear_hand": float(solid.sdf(v[hands]).min()), "clear_body": float(solid.sdf(v[~hands]).min())}
     return out
 
 
