@@ -191,7 +191,7 @@ def test_features_of_another_renderer_are_not_reused(tmp_path, base):
         load_bank(old, SPACE, "isu-blender-99")
 
 
-@pytest.mark.parametrize("option", [["--n", "50"], ["--seed", "0"], ["--check-preset", "standard"]])
+@pytest.mark.parametrize("option", [["--n", "50"], ["--seed", "0"], ["--check-preset", "standard"], ["--fine-tune"]])
 def test_options_of_a_new_training_do_not_apply_to_extra(tmp_path, option, capsys):
     assert main(["reference", "train", "--extra", str(tmp_path), *option]) == 2
     assert "do not apply" in capsys.readouterr().err

@@ -431,3 +431,22 @@ def test_groups_file_is_read_by_path_or_name_and_must_cover_every_photo(class_se
     (tmp_path / "bad.csv").write_text("file,who\nx,y\n")
     with pytest.raises(InputError, match="needs an image column .image, img.* and a group column"):
         read_groups(tmp_path / "bad.csv")
+
+
+def test_a_fine_tuned_recipe_is_another_recipe_and_one_without_reads_as_before(tmp_path):
+    """``fine_tune=BLOCKS`` is part of what a recipe made; a recipe without it keeps the recipe.json it had."""
+    from argparse import Namespace
+
+    from isu_validate.bench.transfer import _train, parse_recipe, recipe_settings
+    args = Namespace(preset="draft", n=4, held_out=2, seed=0)
+    plain = parse_recipe("side=train:n=4,held_out=2")
+    tuned = parse_recipe("side=train:n=4,held_out=2,fine_tune=6")
+    assert tuned.options["fine_tune"] == 6
+    assert "fine_tune" not in json.loads(recipe_settings(plain, args)[1])
+    assert json.loads(recipe_settings(tuned, args)[1])["fine_tune"] == 6
+    folder = tmp_path / "side"
+    folder.mkdir()
+    (folder / "recipe.json").write_text(recipe_settings(plain, args)[1])   # kept from the frozen recipe
+    with pytest.raises(InputError, match="delete"):
+        _train(tuned, folder, args)
+    assert not (folder / "model").exists()

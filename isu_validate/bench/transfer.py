@@ -3,9 +3,9 @@ by side, each judged by what a reference ISU trained only on them does on the re
 
 A recipe is how the training renders are made, or a model already trained from renders:
 - ``NAME=train:camera=RIG,space=SPACE,cabin=RIG,preset=P,n=N,held_out=N,seed=S,camera_jitter=...,
-  sensor_effects=...`` (every key optional; the bench's --n, --held-out, --preset and --seed are the defaults;
-  the last two as ``reference train --camera-jitter/--sensor-effects`` take them, commas and all):
-  ``reference train`` as it is, in
+  sensor_effects=...,fine_tune=BLOCKS`` (every key optional; the bench's --n, --held-out, --preset and --seed are
+  the defaults; camera_jitter and sensor_effects as ``reference train --camera-jitter/--sensor-effects`` take them,
+  commas and all; fine_tune as ``reference train --fine-tune BLOCKS``): ``reference train`` as it is, in
   DIR/recipes/NAME (renders kept, so an interrupted bench goes on);
 - ``NAME=model:DIR[,renders=FOLDER]``: a model ``reference train`` made elsewhere, e.g. with another
   renderer version's checkout (``reference train --out DIR --workdir W``; its held-out renders, W/held-out,
@@ -27,7 +27,7 @@ from ..errors import InputError
 from ..transfer.arguments import add_real_set_arguments, parse_groups
 
 TRAIN_KEYS = {"camera": str, "cabin": str, "space": str, "preset": str, "n": int, "held_out": int, "seed": int,
-              "camera_jitter": str, "sensor_effects": str}
+              "camera_jitter": str, "sensor_effects": str, "fine_tune": int}
 LISTS = ("camera_jitter", "sensor_effects")   # values that are lists themselves: pos=0.05,angle=5
 
 
@@ -116,7 +116,9 @@ def recipe_settings(recipe: Recipe, args) -> tuple[dict, str]:
     o = {"camera": "default", "cabin": "default", "space": "isu-paper", "preset": args.preset, "n": args.n,
          "held_out": args.held_out, "seed": args.seed, "camera_jitter": None, "sensor_effects": None,
          **recipe.options}
-    return o, json.dumps({**o, **_made_with(o)}, sort_keys=True)
+    kept = {k: v for k, v in o.items() if k != "fine_tune"}   # a recipe without it reads as it did before it existed
+    return o, json.dumps({**kept, **({"fine_tune": o["fine_tune"]} if "fine_tune" in o else {}), **_made_with(o)},
+                         sort_keys=True)
 
 
 def _made_with(options: dict) -> dict:
@@ -137,6 +139,7 @@ def _made_with(options: dict) -> dict:
 
 
 def _train(recipe: Recipe, folder: Path, args) -> tuple[Path, Path, str]:
+    from ..reference.fine_tune import FineTune
     from ..reference.training import train_reference
     from ..render import RENDERER_VERSION, open_renderer
     from ..render.variety import Variety, vary
@@ -158,8 +161,10 @@ def _train(recipe: Recipe, folder: Path, args) -> tuple[Path, Path, str]:
                                   cache_dir=folder / "cache", log_dir=folder / "logs", device=args.render_device),
                     variety)
     try:
+        tuning = FineTune(blocks=o["fine_tune"], seed=o["seed"]) if o.get("fine_tune") else None
         train_reference(space, renderer, model, folder, o["n"], o["held_out"], o["seed"], o["preset"],
-                        renderer_version=RENDERER_VERSION, device=args.device, variety=variety.describe())
+                        renderer_version=RENDERER_VERSION, device=args.device, variety=variety.describe(),
+                        fine_tune=tuning)
     finally:
         renderer.close()
     return model, folder / "held-out", description

@@ -8,6 +8,7 @@ from pathlib import Path
 from ..devices import add_device_argument, add_render_device_argument
 from ..errors import InputError
 from ..dataset.settings import VARIETY
+from ..reference.fine_tune import FineTune as FineTuneDefaults
 from . import add_overwrite_option, add_variety_arguments
 
 
@@ -33,6 +34,11 @@ def register(sub) -> None:
     add_device_argument(train)
     train.add_argument("--cabin", help=f"cabin rig name or .toml path (default {DEFAULTS['cabin']})")
     add_variety_arguments(train)   # the training, held-out and checked sets alike; the card records them
+    train.add_argument("--fine-tune", type=int, nargs="?", const=FineTuneDefaults.blocks, metavar="BLOCKS",
+                       help=f"train the backbone's last BLOCKS blocks (default {FineTuneDefaults.blocks} of 16) on "
+                            "the training renders before fitting the heads, with crop, colour, blur and noise "
+                            "augmentation; its weights go beside the heads (backbone.pt). Off by default: the "
+                            "backbone stays ImageNet's, frozen")
     train.add_argument("--extra", nargs="+", type=Path, metavar="DATASET",
                        help="retrain on the --base model's own training scenes (its stored features: nothing is "
                             "rendered again) plus these datasets (`isu-validate dataset`); the card compares every "
@@ -52,7 +58,7 @@ def register(sub) -> None:
 
 
 DEFAULTS = {"n": 600, "held_out": 200, "seed": 0, "preset": "draft", "camera": "default", "cabin": "default"}
-FROM_SCRATCH = ("n", "held_out", "seed", "preset", "check_preset", "camera", "cabin")
+FROM_SCRATCH = ("n", "held_out", "seed", "preset", "check_preset", "camera", "cabin", "fine_tune")
 
 
 def cmd_train(args) -> int:
@@ -79,7 +85,9 @@ def cmd_train_new(args) -> int:
     variety = Variety.parse(args.camera_jitter, args.sensor_effects, args.seed)
     out = args.out or args.workdir / "model"  # never the shipped model unless asked for by name
     checks = dict(parse_check(spec, args.held_out) for spec in args.check_preset)
-    output = _claim(args, out, {"space": space.hash, **{k: getattr(args, k) for k in FROM_SCRATCH},
+    # fine_tune only when given: a model claimed before the option existed resumes as before
+    output = _claim(args, out, {"space": space.hash, **{k: getattr(args, k) for k in FROM_SCRATCH
+                                                        if k != "fine_tune" or args.fine_tune is not None},
                                 **{k: v for k, v in variety.describe().items() if k in VARIETY}})
 
     def renderer_for(preset: str):
@@ -91,13 +99,17 @@ def cmd_train_new(args) -> int:
     try:
         card = train_reference(space, renderer, out, args.workdir, args.n, args.held_out, args.seed, args.preset,
                                other_presets=checks, renderer_for=renderer_for, renderer_version=RENDERER_VERSION,
-                               device=args.device, variety=variety.describe())
+                               device=args.device, variety=variety.describe(), fine_tune=_fine_tune(args))
     finally:
         renderer.close()
     output.mark()   # the model is written last, so a refused or failed training leaves no folder behind
     print(json.dumps(card["held_out"]["per_feature"], indent=2))
     _print_written(out, default_model_dir())
     return 0
+
+
+def _fine_tune(args) -> FineTuneDefaults | None:
+    return FineTuneDefaults(blocks=args.fine_tune, seed=args.seed) if args.fine_tune is not None else None
 
 
 def cmd_retrain(args) -> int:

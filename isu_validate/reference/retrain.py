@@ -18,6 +18,7 @@ from ..errors import InputError
 from .backbone import Backbone
 from .feature_bank import FeatureSet, check_made_with, load_bank, load_feature_set, save_feature_set
 from .heads import load_heads
+from .model import backbone_of
 from .training import accuracy, embed_images, fit_and_describe, write_model
 
 
@@ -43,7 +44,7 @@ def retrain_with_extra(space, base: Path, extra: list[ExtraSet], out: Path, rend
         check_made_with(part.meta, f"dataset {part.source}", space, train.meta["renderer"],
                         f"the base model's features (in {base}) with",
                         "render the dataset again with the current renderer")
-    backbone = backbone or Backbone(*train.meta["input_size"], device=device)
+    backbone = backbone or backbone_of(Path(base), load_heads(Path(base))[1], device)
     if backbone.name != train.meta["backbone"] or list(backbone.size) != list(train.meta["input_size"]):
         raise InputError(f"the features in {base} come from {train.meta['backbone']} at {train.meta['input_size']}, "
                          f"not {backbone.name} at {list(backbone.size)}")
@@ -62,7 +63,7 @@ def retrain_with_extra(space, base: Path, extra: list[ExtraSet], out: Path, rend
                 embed_seconds=round(embedded - start, 1), fit_seconds=round(time.time() - embedded, 1),
                 device=backbone.device.describe(), base_clip_sigma=base_meta.get("clip_sigma"))
     card["change"] = change_summary(card["comparison"])
-    write_model(Path(out), heads, card, [combined, held_out], markdown=retrained_markdown)
+    write_model(Path(out), heads, card, [combined, held_out], markdown=retrained_markdown, backbone=backbone)
     return card
 
 

@@ -9,6 +9,7 @@ how the model does on images it was not trained on.
 """
 from __future__ import annotations
 
+import hashlib
 import json
 import time
 from collections import defaultdict
@@ -22,6 +23,7 @@ from ..progress import Progress
 from ..space import SceneSpace
 from .backbone import Backbone, read_rgb
 from .feature_bank import FILES, FeatureSet, save_bank
+from .fine_tune import FineTune, fine_tune_backbone, save_tuned
 from .heads import CLIP_SIGMA, REGULARISATION_C, Head, fit_head, save_heads
 from ..errors import InputError
 
@@ -173,13 +175,14 @@ def train_reference(space: SceneSpace, renderer, out: Path, workdir: Path, n_tra
                     seed: int, preset: str, backbone: Backbone | None = None,
                     other_presets: Mapping[str, int] | None = None,
                     renderer_for: Callable[[str], object] | None = None, renderer_version: str = "",
-                    device: str = "auto", variety: dict | None = None) -> dict:
+                    device: str = "auto", variety: dict | None = None, fine_tune: FineTune | None = None) -> dict:
     """Render, embed, fit and write the heads, the model card and the features of both sets (so that
     ``reference train --extra`` never renders them again). ``other_presets`` maps a preset name to how
     many of the held-out scenes to render at it as well (``renderer_for(name)`` opens a renderer for
     it, closed here). ``device``: where the backbone runs (``devices.py``), named in the card. ``variety``:
     the camera jitter and sensor effects the renderers apply (``render.variety.Variety.describe()``), recorded
-    in the card and the stored features; {} or None for the camera file's frames."""
+    in the card and the stored features; {} or None for the camera file's frames. ``fine_tune``: train the
+    backbone's last blocks on the training renders first (``fine_tune.py``; a checkpoint in ``workdir`` resumes it)."""
     start = time.time()
     train_scenes = balanced_scenes(space, n_train, np.random.default_rng(seed))
     test_scenes = balanced_scenes(space, n_test, np.random.default_rng(seed + 10_000))
@@ -188,6 +191,7 @@ def train_reference(space: SceneSpace, renderer, out: Path, workdir: Path, n_tra
     others = {name: _render_at(name, space, test_scenes[:n], renderer_for, workdir)
               for name, n in (other_presets or {}).items() if name != preset}
     backbone = backbone or Backbone(device=device)
+    tuning = _fine_tune(space, backbone, train, fine_tune, workdir) if fine_tune else None
     made_with = {"space": space.name, "space_hash": space.hash, "renderer": renderer_version, "preset": preset,
                  "backbone": backbone.name, "input_size": list(backbone.size), "seed": seed,
                  **({"variety": variety} if variety else {})}
@@ -198,9 +202,21 @@ def train_reference(space: SceneSpace, renderer, out: Path, workdir: Path, n_tra
     card["hidden_from_camera"] = {"training": hidden_counts(space, train_scenes, train),
                                   "held_out": hidden_counts(space, test_scenes, test)}
     card.update({"render_preset": preset, "renderer": renderer_version, "device": backbone.device.describe(),
-                 "train_seconds": round(time.time() - start, 1), **({"variety": variety} if variety else {})})
-    write_model(out, heads, card, bank)
+                 "train_seconds": round(time.time() - start, 1), **({"variety": variety} if variety else {}),
+                 **({"fine_tune": tuning} if tuning else {})})
+    write_model(out, heads, card, bank, backbone=backbone)
     return card
+
+
+def _fine_tune(space: SceneSpace, backbone: Backbone, train: list[Example], settings: FineTune, workdir: Path) -> dict:
+    """Tune ``backbone`` on the training renders; the checkpoint is named by the settings and the training set, so
+    another set or other settings in the same workdir start afresh."""
+    scenes = [e.scene for e in train]
+    key = hashlib.sha256(json.dumps([settings.key, list(backbone.size), scenes], sort_keys=True).encode())
+    started = time.time()
+    card = fine_tune_backbone(backbone, [e.image for e in train], scenes, space, settings,
+                              checkpoint=workdir / f"fine-tune-{key.hexdigest()[:16]}.pt")
+    return {**card, "seconds": round(time.time() - started, 1)}
 
 
 def fit_and_describe(space: SceneSpace, train: FeatureSet, held_out: FeatureSet, seed: int,
@@ -222,8 +238,13 @@ def fit_and_describe(space: SceneSpace, train: FeatureSet, held_out: FeatureSet,
 
 
 def write_model(out: Path, heads: list[Head], card: dict, bank: list[FeatureSet] | None,
-                markdown: Callable[[dict], str] | None = None) -> None:
-    save_heads(heads, out, {k: card[k] for k in ("backbone", "input_size", "space", "space_hash", "seed")})
+                markdown: Callable[[dict], str] | None = None, backbone: Backbone | None = None) -> None:
+    """Heads, card and stored features; a tuned backbone's weights beside them (``heads.json`` names the file)."""
+    meta = {k: card[k] for k in ("backbone", "input_size", "space", "space_hash", "seed")}
+    if backbone is not None and backbone.tuned_blocks:
+        out.mkdir(parents=True, exist_ok=True)
+        meta["backbone_weights"] = save_tuned(backbone, out)
+    save_heads(heads, out, meta)
     if bank:
         save_bank(out, *bank)
     (out / "model_card.json").write_text(json.dumps(card, indent=2))
@@ -260,10 +281,12 @@ def model_card_markdown(card: dict) -> str:
              f"render preset `{card['render_preset']}`",
              f"- Held-out set: {card['held_out_scenes']} scenes, seed {card['seed'] + 10_000}{also}",
              *_variety_lines(card.get("variety")),
+             *_fine_tune_lines(card.get("fine_tune")),
              *_hidden_lines(card.get("hidden_from_camera")),
              f"- Reproduce: `isu-validate reference train --n {card['training_scenes']} "
              f"--held-out {card['held_out_scenes']} --seed {card['seed']} --preset {card['render_preset']}{reproduce}"
-             + _variety_flags(card.get("variety")) + "`",
+             + _variety_flags(card.get("variety"))
+             + (f" --fine-tune {card['fine_tune']['blocks']}" if card.get("fine_tune") else "") + "`",
              f"- Stored features: `{FILES['train']}` and `{FILES['held_out']}` hold the backbone features (float32), "
              "scenes and renderer version of both sets, so `isu-validate reference train --extra DATASET...` "
              "retrains on them plus the dataset without rendering them again, and compares on the same held-out scenes",
@@ -304,6 +327,15 @@ def _variety_lines(variety: dict | None) -> list[str]:
     from ..render.variety import card_lines
 
     return ["- Variety (training, held-out and checked sets alike):", *("  " + line for line in card_lines(variety))]
+
+
+def _fine_tune_lines(tuning: dict | None) -> list[str]:
+    if not tuning:
+        return []
+    return [f"- Fine-tuned: the backbone's last {tuning['blocks']} blocks trained on the {tuning['images']} training "
+            f"renders for {tuning['epochs']} epochs (lr {tuning['learning_rate']:g}, batch {tuning['batch']}, crops, "
+            f"colour, grey, blur and sensor noise; every predicted feature at once), {tuning['seconds']:.0f} s; "
+            f"the heads were fitted on the tuned features. Weights: `backbone.pt`"]
 
 
 def _variety_flags(variety: dict | None) -> str:
