@@ -126,3 +126,13 @@ def test_retraining_a_tuned_model_with_extra_data_keeps_its_backbone(tuned, tmp_
     kept, base = (Backbone(160, 120, tuned=f / WEIGHTS_FILE).tuned_state for f in (tmp_path / "out", folder / "model"))
     assert kept.keys() == base.keys() and all(np.array_equal(kept[k], base[k]) for k in kept)
     ReferenceISU(SPACE, tmp_path / "out")   # reads with the same weights, checked by name
+
+
+def test_the_command_line_option_defaults_to_six_blocks_and_is_off_without_it():
+    from isu_validate.cli import build_parser
+    from isu_validate.commands.reference import _fine_tune
+
+    parse = lambda *extra: build_parser().parse_args(["reference", "train", *extra])  # noqa: E731
+    assert _fine_tune(parse()) is None
+    assert _fine_tune(parse("--fine-tune", "--seed", "4")) == FineTune(blocks=6, seed=4)
+    assert _fine_tune(parse("--fine-tune", "3")).blocks == 3
