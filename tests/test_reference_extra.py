@@ -128,6 +128,8 @@ def test_the_card_names_the_runs_behind_a_focused_dataset_and_its_reproduce_line
          "failing": 19}]}
     (dataset / "dataset.json").write_text(json.dumps(info))
     out = tmp_path / "m"
+    (tmp_path / "first").mkdir()
+    monkeypatch.chdir(tmp_path / "first")   # its default workdir here, not a features cache kept in the checkout
     assert main(["reference", "train", "--extra", str(dataset), "--base", str(base), "--out", str(out)]) == 0
     card = json.loads((out / "model_card.json").read_text())
     assert card["extra"][0]["runs"] == [{"run": "/abs/runs/find", "sut": "reference", "sut_options": {},

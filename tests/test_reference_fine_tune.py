@@ -5,6 +5,7 @@ import shutil
 
 import numpy as np
 import pytest
+import torch
 
 from isu_validate.errors import InputError, InputNotFound
 from isu_validate.reference import fine_tune as fine_tune_module
@@ -90,6 +91,7 @@ def test_a_fine_tune_killed_after_an_epoch_resumes_to_the_same_weights(tmp_path,
     with pytest.raises(KeyboardInterrupt):
         fine_tune_backbone(Backbone(160, 120, threads=2), images, scenes, SPACE, SMALL, checkpoint=checkpoint)
     monkeypatch.setattr(fine_tune_module._Trainer, "epoch", real_epoch)
+    assert torch.load(checkpoint, weights_only=True)["epochs_done"] == 1   # the kill left the first epoch committed
     resumed = Backbone(160, 120, threads=2)
     card = fine_tune_backbone(resumed, images, scenes, SPACE, SMALL, checkpoint=checkpoint)
     assert card["epochs"] == 2

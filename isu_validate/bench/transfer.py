@@ -115,10 +115,8 @@ def recipe_settings(recipe: Recipe, args) -> tuple[dict, str]:
     """(a train recipe's options with the bench's defaults, what its recipe.json holds: those and ``_made_with``)."""
     o = {"camera": "default", "cabin": "default", "space": "isu-paper", "preset": args.preset, "n": args.n,
          "held_out": args.held_out, "seed": args.seed, "camera_jitter": None, "sensor_effects": None,
-         **recipe.options}
-    kept = {k: v for k, v in o.items() if k != "fine_tune"}   # a recipe without it reads as it did before it existed
-    return o, json.dumps({**kept, **({"fine_tune": o["fine_tune"]} if "fine_tune" in o else {}), **_made_with(o)},
-                         sort_keys=True)
+         **recipe.options}   # no default for fine_tune: a recipe without it reads as it did before it existed
+    return o, json.dumps({**o, **_made_with(o)}, sort_keys=True)
 
 
 def _made_with(options: dict) -> dict:

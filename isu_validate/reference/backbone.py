@@ -83,13 +83,24 @@ class Backbone:
         out = [self._batch(images[i:i + batch]) for i in range(0, len(images), batch)]
         return np.concatenate(out) if out else np.zeros((0, self.dim), np.float32)
 
-    def _batch(self, images: list[np.ndarray]) -> np.ndarray:
+    def pixels(self, images: list[np.ndarray]):
+        """RGB uint8 images (any size) -> the (n, 3, height, width) uint8 tensor the backbone reads, on the CPU:
+        the one resize that reading and fine-tuning share."""
         import cv2
 
-        torch = self.torch
         arrays = [cv2.resize(im, self.size, interpolation=cv2.INTER_AREA) for im in images]
-        x = torch.from_numpy(np.stack(arrays)).to(self.device.name).permute(0, 3, 1, 2).float()
-        x = (x - INPUT_MEAN) / INPUT_STD
+        # a view, not a contiguous copy: the convolutions then see the memory layout the stored features were made
+        # with (a contiguous input picks other kernels and moves the features in their last digits)
+        return self.torch.from_numpy(np.stack(arrays)).permute(0, 3, 1, 2)
+
+    @staticmethod
+    def normalise(x):
+        """Pixel values (0..255, float) -> the network's input scale."""
+        return (x - INPUT_MEAN) / INPUT_STD
+
+    def _batch(self, images: list[np.ndarray]) -> np.ndarray:
+        torch = self.torch
+        x = self.normalise(self.pixels(images).to(self.device.name).float())
         with torch.inference_mode():
             fmap = self.model.extract_features(x)
             pooled = [torch.nn.functional.adaptive_avg_pool2d(fmap, 1).flatten(1),

@@ -19,11 +19,10 @@ import sys
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-import numpy as np
 
 from ..atomic import atomic_path
 from ..errors import InputError
-from .backbone import INPUT_MEAN, INPUT_STD, Backbone, read_rgb
+from .backbone import Backbone, read_rgb
 
 WEIGHTS_FILE = "backbone.pt"   # a tuned model's backbone, beside its heads
 BLOCKS = 16                    # EfficientNet-Lite0's mobile blocks
@@ -59,7 +58,7 @@ def fine_tune_backbone(backbone: Backbone, images: list[Path], scenes: list[dict
     feature (the answers a scene's label has; a feature the frame hides is not learnt from). Leaves the tuned
     weights in ``backbone`` (``Backbone.tune``) and returns what the card records."""
     stream = stream or sys.stderr
-    pixels = _load(images, backbone.size)
+    pixels = backbone.pixels([read_rgb(path) for path in images])
     targets, classes = _targets(space, scenes)
     trainer = _Trainer(backbone, classes, settings)
     first = trainer.resume(checkpoint) if checkpoint else 0
@@ -72,14 +71,6 @@ def fine_tune_backbone(backbone: Backbone, images: list[Path], scenes: list[dict
     backbone.tune(trainer.tuned_state(), settings.blocks)
     return {**asdict(settings), "images": len(images), "features": list(classes),
             "last_epoch_loss": round(losses[-1], 4) if losses else None}
-
-
-def _load(images: list[Path], size: tuple[int, int]):
-    import cv2
-    import torch
-
-    arrays = [cv2.resize(read_rgb(p), size, interpolation=cv2.INTER_AREA) for p in images]
-    return torch.from_numpy(np.stack(arrays)).permute(0, 3, 1, 2).contiguous()
 
 
 def _targets(space, scenes: list[dict]):
@@ -133,7 +124,7 @@ class _Trainer:
         order, total = torch.randperm(len(pixels)), 0.0
         for start in range(0, len(pixels), s.batch):
             index = order[start:start + s.batch]
-            x = _normalise(self._noisy(torch.stack([self.augment(image) for image in pixels[index]])))
+            x = self.backbone.normalise(self._noisy(torch.stack([self.augment(image) for image in pixels[index]])))
             loss = self._loss(self._pooled(x.to(self.where)), targets[index].to(self.where))
             self.optimiser.zero_grad()
             loss.backward()
@@ -230,10 +221,6 @@ def _augmentation(size: tuple[int, int]):
     return T.Compose([T.RandomResizedCrop((height, width), scale=(0.6, 1.0), ratio=(1.2, 1.45), antialias=True),
                       T.RandomApply([T.ColorJitter(0.4, 0.4, 0.4, 0.08)], p=0.9), T.RandomGrayscale(0.15),
                       T.RandomApply([T.GaussianBlur(5, (0.1, 1.5))], p=0.4)])
-
-
-def _normalise(x):
-    return (x - INPUT_MEAN) / INPUT_STD
 
 
 def save_tuned(backbone: Backbone, folder: Path) -> str:

@@ -44,7 +44,8 @@ def retrain_with_extra(space, base: Path, extra: list[ExtraSet], out: Path, rend
         check_made_with(part.meta, f"dataset {part.source}", space, train.meta["renderer"],
                         f"the base model's features (in {base}) with",
                         "render the dataset again with the current renderer")
-    backbone = backbone or backbone_of(Path(base), load_heads(Path(base))[1], device)
+    base_heads, base_meta = load_heads(Path(base))
+    backbone = backbone or backbone_of(Path(base), base_meta, device)
     if backbone.name != train.meta["backbone"] or list(backbone.size) != list(train.meta["input_size"]):
         raise InputError(f"the features in {base} come from {train.meta['backbone']} at {train.meta['input_size']}, "
                          f"not {backbone.name} at {list(backbone.size)}")
@@ -53,7 +54,6 @@ def retrain_with_extra(space, base: Path, extra: list[ExtraSet], out: Path, rend
     combined = FeatureSet(np.concatenate([train.features, *extra_X]),
                           train.scenes + [scene for part in extra for scene in part.scenes], train.meta)
     heads, card = fit_and_describe(space, combined, held_out, train.meta["seed"])
-    base_heads, base_meta = load_heads(Path(base))
     before = accuracy(space, base_heads, held_out.features, held_out.scenes)["per_feature"]
     card.update(renderer=train.meta["renderer"], base=str(Path(base).resolve()), base_training_scenes=len(train.scenes),
                 extra=[{"dataset": part.source, "content_hash": part.content_hash, "images": len(part.images),

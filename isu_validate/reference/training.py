@@ -23,7 +23,7 @@ from ..progress import Progress
 from ..space import SceneSpace
 from .backbone import Backbone, read_rgb
 from .feature_bank import FILES, FeatureSet, save_bank
-from .fine_tune import FineTune, fine_tune_backbone, save_tuned
+from .fine_tune import WEIGHTS_FILE, FineTune, fine_tune_backbone, save_tuned
 from .heads import CLIP_SIGMA, REGULARISATION_C, Head, fit_head, save_heads
 from ..errors import InputError
 
@@ -335,7 +335,7 @@ def _fine_tune_lines(tuning: dict | None) -> list[str]:
     return [f"- Fine-tuned: the backbone's last {tuning['blocks']} blocks trained on the {tuning['images']} training "
             f"renders for {tuning['epochs']} epochs (lr {tuning['learning_rate']:g}, batch {tuning['batch']}, crops, "
             f"colour, grey, blur and sensor noise; every predicted feature at once), {tuning['seconds']:.0f} s; "
-            f"the heads were fitted on the tuned features. Weights: `backbone.pt`"]
+            f"the heads were fitted on the tuned features. Weights: `{WEIGHTS_FILE}`"]
 
 
 def _variety_flags(variety: dict | None) -> str:
