@@ -201,7 +201,8 @@ def test_the_cache_is_keyed_reused_and_needs_no_anny_on_a_hit(people, monkeypatc
 def test_people_commands_warm_and_check_the_cache(people, capsys):
     from isu_validate.cli import main
     assert main(["people", "warm", "--limit", "1", "--cache", str(people.store.root)]) == 0
-    drivers = 1 + len(people.cabin["hand_positions"])      # 1 of the grid + each rig hand position
+    # 1 of the grid + each rig hand position + each gaze target, the hands on the wheel and with the phone at the ear
+    drivers = 1 + len(people.cabin["hand_positions"]) + 2 * len(people.cabin["gaze_targets"])
     assert f"{drivers} drivers and 2 children" in capsys.readouterr().out
     assert main(["people", "check", "--limit", "1", "--cache", str(people.store.root)]) == 0
     out = capsys.readouterr().out
@@ -371,6 +372,61 @@ def test_a_hand_position_the_rig_lacks_or_a_malformed_one_is_refused_with_the_fi
         load_cabin(bad)
     bad.write_text(text.replace("\nat_ear = true", "\nat_ear = \"yes\"", 1))
     with pytest.raises(CabinRigError, match=r"phone_positions.P1\] at_ear must be true or false"):
+        load_cabin(bad)
+
+
+@pytest.mark.parametrize("gaze, phone, hands", [("DOWN", "P5", "WHEEL"), ("DOWN", "NONE", "CONSOLE"),
+                                                 ("PASSENGER", "NONE", "WHEEL"), ("MIRROR", "NONE", "LAP"),
+                                                 ("PASSENGER", "P1", "WHEEL"), ("DOWN", "NONE", "DRINK_LOW")])
+def test_the_head_turns_to_where_the_driver_looks_and_what_is_held_at_it_turns_with_it(people, model, gaze, phone,
+                                                                                        hands):
+    """isu-diverse's driver_gaze: the face turns HEAD_SHARE of the way to the rig's gaze target (down to the phone
+    or the free hand when one is held below the head), within the limits (smaller with a hand at the head); only
+    the neck and head move; the body still clears seat and wheel; a phone at the ear stays at the turned ear."""
+    from isu_validate.render.people import seated
+    from isu_validate.render.people.phenotype import driver_phenotype
+    from isu_validate.render.people.skeleton import Body
+    cabin = people.cabin
+    body = Body(model, driver_phenotype("MALE", "H2", "W2"))
+    road, dp = (seated.seat_and_pose(body, cabin, phone, hands, g) for g in ("ROAD", gaze))
+    before, after = (p.posed.rot("head") @ seated.FACING for p in (road, dp))
+    spec = cabin["phone_positions"].get(phone) or cabin["hand_positions"].get(hands)
+    look = cabin["gaze_targets"][gaze]
+    at = spec if look.get("at_hands") and spec and spec["relative_to"] != "head" else look
+    want = (seated._reference(road.posed, at, cabin, road.head_centre) + np.asarray(at["offset"])
+            - (road.posed.head("eye.L") + road.posed.head("eye.R")) / 2)
+    heading = {k: np.degrees(seated._heading(v)) for k, v in (("want", want), ("before", before), ("after", after))}
+    rise = {k: np.degrees(seated._elevation(v)) for k, v in (("want", want), ("before", before), ("after", after))}
+    limit = seated.HOLDING_MAX_DEG if spec and spec["relative_to"] == "head" else seated.HEAD_MAX_DEG
+    yaw = np.clip(seated.HEAD_SHARE * (heading["want"] - heading["before"]), -limit["yaw"], limit["yaw"])
+    pitch = np.clip(seated.HEAD_SHARE * (rise["want"] - rise["before"]), -limit["down"], limit["up"])
+    assert abs(heading["after"] - heading["before"] - yaw) < 1.0, (heading, yaw)
+    assert abs(rise["after"] - rise["before"] - pitch) < 1.0, (rise, pitch)
+    assert max(abs(yaw), abs(pitch)) > 10.0, "the head hardly turned"
+    np.testing.assert_allclose(dp.posed.head("neck01"), road.posed.head("neck01"), atol=1e-6)
+    state = _load(people.driver_state("MALE", "H2", "W2", "SERIOUS", phone, None, hands, gaze))
+    m = driver_measures(state, _load(people.topology("male")), cabin)
+    for part in ("cushion", "back", "base", "headrest0"):
+        assert m[f"clear_{part}"] >= 0.0, (part, m)
+    assert m["clear_wheel_body"] >= 0.0 and m["clear_wheel_hands"] >= -HAND_TOUCH, m
+    if phone == "P1":
+        assert np.linalg.norm(dp.phone[0] - road.phone[0]) > 0.03, "the phone stayed at the unturned ear"
+        np.testing.assert_allclose(np.linalg.norm(dp.phone[0] - dp.head_centre),
+                                   np.linalg.norm(road.phone[0] - road.head_centre), atol=0.01)
+        assert m["phone_to_palm"] < 0.016 and m["phone_front_touch"] >= 20, m
+
+
+def test_a_gaze_the_rig_lacks_or_a_malformed_gaze_target_is_refused_with_the_fix(model, tmp_path):
+    from isu_validate.render.cabin import CabinRigError
+    from isu_validate.render.people.phenotype import driver_phenotype
+    from isu_validate.render.people.seated import seat_and_pose
+    from isu_validate.render.people.skeleton import Body
+    with pytest.raises(ValueError, match=r"no \[gaze_targets.SKY\]; known: ROAD, DOWN, PASSENGER, MIRROR"):
+        seat_and_pose(Body(model, driver_phenotype("MALE", "H2", "W2")), load_cabin("default"), "NONE", "WHEEL", "SKY")
+    text = (Path(__file__).parents[1] / "rigs" / "cabins" / "default.toml").read_text()
+    bad = tmp_path / "bad.toml"
+    bad.write_text(text.replace("offset = [0.25, -0.75, -0.02]", "offset = \"right\"", 1))
+    with pytest.raises(CabinRigError, match=r"gaze_targets.PASSENGER\] needs relative_to .* offset = \[x, y, z\]"):
         load_cabin(bad)
 
 

@@ -154,7 +154,7 @@ def test_the_garments_and_accessories_show_in_a_draft_render_and_keep_the_belt_v
              "driver_eyewear": "NONE", "driver_cap": "NO", "driver_watch": "NO",
              # isu-diverse's world, car, hands and phone screen, as isu-paper renders them
              "surroundings": "TOWN", "cabin_trim": "GREY", "seat_material": "FABRIC", "driver_hands": "WHEEL",
-             "phone_screen": "BY_USE"}
+             "driver_gaze": "ROAD", "phone_screen": "BY_USE"}
     variants = {"paper": None, "tshirt": {}, "long_sleeve": {"driver_top": "LONG_SLEEVE"},
                 "jacket": {"driver_top": "JACKET", "driver_jacket_colour": "NAVY"},
                 "sunglasses_cap": {"driver_eyewear": "SUNGLASSES", "driver_cap": "YES"}}

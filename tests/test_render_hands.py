@@ -1,5 +1,6 @@
-"""What the hands do besides holding a phone, and the phone's screen (issue 44, `isu-blender-10`): unasked
-features of isu-diverse only; isu-paper keeps both hands on the wheel and renders the screen BY_USE."""
+"""What the hands do besides holding a phone, where the driver looks, and the phone's screen (issue 44,
+`isu-blender-10` and later): unasked features of isu-diverse only; isu-paper keeps both hands on the wheel, the eyes
+on the road, and renders the screen BY_USE."""
 from __future__ import annotations
 
 import numpy as np
@@ -16,7 +17,8 @@ BASE = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height": "
         "driver_skin_tone": "MEDIUM", "driver_hair_colour": "BROWN", "driver_hair_style": "SHORT",
         "driver_top": "TSHIRT", "driver_top_print": "PLAIN", "driver_trousers_colour": "NAVY",
         "driver_eyewear": "NONE", "driver_cap": "NO", "driver_watch": "NO", "surroundings": "TOWN",
-        "cabin_trim": "GREY", "seat_material": "FABRIC", "driver_hands": "WHEEL", "phone_screen": "BY_USE"}
+        "cabin_trim": "GREY", "seat_material": "FABRIC", "driver_hands": "WHEEL", "phone_screen": "BY_USE",
+        "driver_gaze": "ROAD"}
 
 
 def test_the_screen_is_lit_while_read_and_dark_at_the_ear_unless_forced():
@@ -30,7 +32,7 @@ def test_the_screen_is_lit_while_read_and_dark_at_the_ear_unless_forced():
 
 def test_hands_and_screen_are_unasked_features_of_isu_diverse_with_the_paper_defaults():
     paper, diverse = load_space("isu-paper"), load_space("isu-diverse")
-    for name, default in (("driver_hands", "WHEEL"), ("phone_screen", "BY_USE")):
+    for name, default in (("driver_hands", "WHEEL"), ("phone_screen", "BY_USE"), ("driver_gaze", "ROAD")):
         assert name in diverse.names and name not in paper.names and not diverse.features[name].predicted
         assert DEFAULTS[name] == default and default in diverse.features[name].values
 
@@ -43,7 +45,8 @@ def test_a_free_hand_moves_the_arm_and_a_read_screen_is_lit_and_black_when_off(t
     from isu_validate.render.labels import INSTANCE_ID
     variants = {"wheel": {}, "lap": {"driver_hands": "LAP"}, "drink": {"driver_hands": "DRINK", "drink": "CAN"},
                 "cup": {"driver_hands": "DRINK_LOW", "drink": "WHITE_CUP"},
-                "read_by_use": {"phone_position": "P9"}, "read_off": {"phone_position": "P9", "phone_screen": "OFF"}}
+                "read_by_use": {"phone_position": "P9"}, "read_off": {"phone_position": "P9", "phone_screen": "OFF"},
+                "passenger": {"driver_gaze": "PASSENGER"}}
     frames = {}
     with open_renderer("draft", space="isu-diverse", channels=("seg",), log_dir=tmp_path / "logs") as r:
         for name, change in variants.items():
@@ -54,6 +57,12 @@ def test_a_free_hand_moves_the_arm_and_a_read_screen_is_lit_and_black_when_off(t
     (wheel, wheel_seg), (lap, lap_seg) = frames["wheel"], frames["lap"]
     moved = (np.abs(lap - wheel).max(axis=2) > 24) & ((wheel_seg == driver) | (lap_seg == driver))
     assert moved.sum() >= 100, f"the right hand on the lap changed only {moved.sum()} driver pixels"
+    # the head turned to the passenger: the head moves, the hands stay on the wheel
+    face, (turned, turned_seg) = INSTANCE_ID["driver_face"], frames["passenger"]
+    head = (wheel_seg == face) | (turned_seg == face)
+    assert ((np.abs(turned - wheel).max(axis=2) > 24) & head).sum() >= 100, "the head did not turn"
+    body = (wheel_seg == driver) & (turned_seg == driver)
+    assert (np.abs(turned - wheel).max(axis=2)[body] > 24).mean() < 0.05, "more than the head moved"
     # drinking: the can shows in the hand as its own instance, never as the co-driver seat's can
     can = INSTANCE_ID["colacan_in_hand"]
     assert (frames["drink"][1] == can).sum() >= 50 and not (wheel_seg == can).any()

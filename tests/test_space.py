@@ -185,12 +185,13 @@ def test_a_space_extends_another_adding_features_and_keeping_its_constraints(tmp
     assert diverse.names[:len(SPACE.names)] == SPACE.names
     looks = ("driver_skin_tone", "driver_hair_colour", "driver_hair_style", "driver_top", "driver_top_print",
              "driver_print_colour", "driver_jacket_colour", "driver_trousers_colour", "driver_eyewear", "driver_cap",
-             "driver_watch", "driver_hands", "drink", "phone_screen")
+             "driver_watch", "driver_hands", "drink", "phone_screen", "driver_gaze")
     assert set(diverse.names) - set(SPACE.names) == set(looks) | {"surroundings", "sun_direction", "cabin_trim",
                                                                   "seat_material"}
     # every value of what the hands do is a position the default rig has (or both hands on the wheel)
     from isu_validate.render.cabin import load_cabin
     assert set(diverse.features["driver_hands"].values) == {"WHEEL"} | set(load_cabin("default")["hand_positions"])
+    assert set(diverse.features["driver_gaze"].values) == {"ROAD"} | set(load_cabin("default")["gaze_targets"])
     assert not any(diverse.features[n].predicted for n in looks)
     assert len(diverse.constraints) == len(SPACE.constraints)
     assert {f.name: f.weight for f in diverse.predicted} == {f.name: f.weight for f in SPACE.predicted}

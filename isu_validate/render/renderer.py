@@ -52,6 +52,8 @@ from .worker import BlenderWorker, WorkerCrashed, WorkerFailed, WorkerTimeout
 # (5 cm higher: the rim clears the knees); the belt rests on cloth the rays that lift it missed
 # later (issue 44) driver_hands DRINK_LOW (a drink held below the chin) and `drink` (cups, a bottle, a mug besides the
 # can): new values that change no earlier scene's frame, so no bump
+# later (issue 44) driver_gaze (the head turned down to the hands, to the passenger or to the mirror): a new feature
+# whose ROAD is every earlier scene's frame, so no bump
 RENDERER_VERSION = "isu-blender-13"
 
 # what the worker shows for a feature the scene space does not have (or that is inactive)
@@ -71,6 +73,8 @@ DEFAULTS = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height
             "driver_cap": "NO", "driver_watch": "NO",
             # what the hands do besides holding a phone (isu-diverse varies it; isu-paper: both on the wheel)
             "driver_hands": "WHEEL", "drink": "CAN",
+            # where the driver looks (isu-diverse varies it; isu-paper: the road)
+            "driver_gaze": "ROAD",
             # the phone in the hand: lit while read, dark at the ear in a call (isu-diverse: also always on or off)
             "phone_screen": "BY_USE"}
 

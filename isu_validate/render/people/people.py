@@ -36,7 +36,7 @@ def rig_part_hash(cabin: dict, parts: tuple[str, ...]) -> str:
     return hashlib.sha256(json.dumps(content, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
 
-_DRIVER_RIG = ("seats.driver", "steering_wheel", "seat_belt", "phone_positions", "hand_positions")
+_DRIVER_RIG = ("seats.driver", "steering_wheel", "seat_belt", "phone_positions", "hand_positions", "gaze_targets")
 _CHILD_RIG = ("anchors.child_seat",)
 
 
@@ -55,7 +55,8 @@ class People:
             kind = "female" if f["driver_gender"] == "FEMALE" else "male"
             style = hair_style_of(f, kind)
             state = self.driver_state(f["driver_gender"], f["driver_height"], f["driver_weight"],
-                                      f["driver_emotion"], f["phone_position"], style, f.get("driver_hands", "WHEEL"))
+                                      f["driver_emotion"], f["phone_position"], style, f.get("driver_hands", "WHEEL"),
+                                      f.get("driver_gaze", "ROAD"))
             top = f.get("driver_top", "TSHIRT")
             out["driver"] = {"topology": str(self.topology(kind, style)), "state": str(state), "kind": kind,
                              "outfit": str(self.outfit(kind, style, top)),
@@ -77,17 +78,18 @@ class People:
             return self.store.put("topology", key, _topology(kind, style))
 
     def driver_state(self, gender: str, height: str, weight: str, emotion: str, phone_position: str,
-                     style: str | None = None, hands: str = "WHEEL"):
+                     style: str | None = None, hands: str = "WHEEL", gaze: str = "ROAD"):
         kind = "female" if gender == "FEMALE" else "male"
         style = style or HAIR_STYLE[kind]
         inputs = {"rig": self.driver_rig, "gender": gender, "height": height, "weight": weight,
-                  "emotion": emotion, "phone_position": phone_position, "hair": style, "hands": hands}
+                  "emotion": emotion, "phone_position": phone_position, "hair": style, "hands": hands,
+                  **({"gaze": gaze} if gaze != "ROAD" else {})}
         key = entry_key("driver", inputs)
         found = self.store.get("driver", key)
         if found:
             return found
         with _posing(self):
-            pose = self._driver_pose(gender, height, weight, phone_position, hands)
+            pose = self._driver_pose(gender, height, weight, phone_position, hands, gaze)
             topo = load_entry(self.topology(kind, style))
             phenotype, deltas = driver_phenotype(gender, height, weight), _deltas_from(pose)
             posed = Body(load_model(), phenotype, expressions.facial_actions(emotion)).evaluate(deltas)
@@ -132,16 +134,17 @@ class People:
             posed = child.pose_child(body, front_facing, self.cabin["anchors"]["child_seat"])
             return self.store.put("child", key, _surface_state(posed, topo))
 
-    def _driver_pose(self, gender, height, weight, phone_position, hands: str = "WHEEL") -> dict:
+    def _driver_pose(self, gender, height, weight, phone_position, hands: str = "WHEEL", gaze: str = "ROAD") -> dict:
         """The expression-free pose (bone deltas), belt straps and phone placement of a driver."""
         key = entry_key("driver-pose", {"rig": self.driver_rig, "gender": gender, "height": height,
-                                        "weight": weight, "phone_position": phone_position, "hands": hands})
+                                        "weight": weight, "phone_position": phone_position, "hands": hands,
+                                        **({"gaze": gaze} if gaze != "ROAD" else {})})
         found = self.store.load("driver-pose", key)
         if found:
             return found
         model = load_model()
         body = Body(model, driver_phenotype(gender, height, weight))
-        dp = seated.seat_and_pose(body, self.cabin, phone_position, hands)
+        dp = seated.seat_and_pose(body, self.cabin, phone_position, hands, gaze)
         faces = model.faces.cpu().numpy()
         hardware = dict(self.cabin["seat_belt"])
         for part in ("buckle", "lap_anchor"):     # mounted on the seat: they slide with it

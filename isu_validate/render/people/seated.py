@@ -3,7 +3,9 @@ backrest, clear of both; the seat slid on its track until the wheel is in reach)
 feet towards the pedals, hands on the steering wheel at ten and two, or
 one hand holding the phone at one of the rig's phone positions P1-P10 (reached by inverse kinematics,
 the phone placed in the posed palm), and a free hand off the wheel at one of the rig's hand positions
-(on the lap, at the console, at the face, a can to the mouth...: what hands do besides holding a phone).
+(on the lap, at the console, at the face, a can to the mouth...: what hands do besides holding a phone), the
+head turned to where the driver looks (the road, down at the hands, the passenger, the mirror) with what is
+held at the head turning with it.
 
 anny's frame (Z up, the body faces -Y, its left is +X) is turned into the cabin's (x forward, y left,
 z up) by the root bone's world pose, so every joint is solved directly in cabin coordinates."""
@@ -18,7 +20,7 @@ from ..cabin_geometry import CAN_RADIUS, PHONE_SIZE, RIM_TUBE, can_cylinder, pho
 from .hands import FINGERS, HandFrame, close_on, hand_frame, turn_to, wrap
 from .limbs import Limb, reach
 from .regions import bone_weights
-from .skeleton import Body, Posed, align, rigid, rot_x, rot_z, rotation
+from .skeleton import Body, Posed, align, delta_for, rigid, rot_x, rot_z, rotation
 
 GAP = 0.004              # clearance between the body and the seat it rests on (m)
 RECLINE_DEG = 14.0       # the torso leans back with the backrest (17 deg): a little upright of it
@@ -39,6 +41,12 @@ PHONE_THICKNESS = PHONE_SIZE[2]
 SIDE = {"left": "L", "right": "R"}      # the driver's left hand is anny's .L (towards cabin +y)
 SEAT_TRACK = (-0.08, 0.22)   # the seat slides this far back/forward to fit the driver (m)
 REACH = 0.86                 # shoulder to palm at this share of the arm's length: elbows a little bent
+HEAD_SHARE = 0.8             # the head turns this share of the way to what the driver looks at (the eyes the rest)
+HEAD_MAX_DEG = {"yaw": 60.0, "down": 35.0, "up": 15.0}   # ... at most this far from looking at the road
+HOLDING_MAX_DEG = {"yaw": 30.0, "down": 15.0, "up": 15.0}   # ... less far with a hand at the head, which turns
+                                                            # with it (further, the elbow meets the backrest)
+NECK_SHARES = {"neck01": 0.3, "neck02": 0.3, "head": 0.4}  # how the turn is spread down the neck
+FACING = np.array([0.0, -1.0, 0.0])   # where anny's head faces in its reference pose
 
 
 @dataclass
@@ -56,23 +64,37 @@ def anny_to_cabin() -> np.ndarray:
     return rot_z(90.0)
 
 
-def seat_and_pose(body: Body, rig: dict, phone_position: str = "NONE", hands: str = "WHEEL") -> DriverPose:
-    """Seat the body, slide the seat on its track until the wheel is in reach, then place the hands:
-    ``hands`` names a rig hand position for one hand (WHEEL: both on the wheel); the phone's hand wins."""
+def seat_and_pose(body: Body, rig: dict, phone_position: str = "NONE", hands: str = "WHEEL",
+                  gaze: str = "ROAD") -> DriverPose:
+    """Seat the body, slide the seat on its track until the wheel is in reach, turn the head to ``gaze`` (a rig
+    gaze target; ROAD: eyes on the road), then place the hands: ``hands`` names a rig hand position for one hand
+    (WHEEL: both on the wheel); the phone's hand wins."""
     free = rig.get("hand_positions", {}).get(hands)
     if hands != "WHEEL" and free is None:
         raise ValueError(f"the cabin rig has no [hand_positions.{hands}]; known: WHEEL, "
                          f"{', '.join(rig.get('hand_positions', {})) or 'none'} (see rigs/cabins/default.toml)")
+    look = rig.get("gaze_targets", {}).get(gaze)
+    if gaze != "ROAD" and look is None:
+        raise ValueError(f"the cabin rig has no [gaze_targets.{gaze}]; known: ROAD, "
+                         f"{', '.join(rig.get('gaze_targets', {})) or 'none'} (see rigs/cabins/default.toml)")
     shift = 0.0
     for _ in range(2):    # sliding the seat can move the driver on the cushion: measure again once
         deltas, rest = _sit(body, rig, shift)
         shift = float(np.clip(shift + _track_shift(rest, rig), *SEAT_TRACK))
     deltas, rest = _sit(body, rig, shift)
     head_centre = _head_centre(rest)
+    spec = rig["phone_positions"].get(phone_position)
+    if look:
+        at_head = any(s and s["relative_to"] == "head" for s in (spec, free))
+        turn, neck = _head_turn(rest, deltas, body.parent, _gaze_point(rest, look, (spec, free), rig, head_centre),
+                                HOLDING_MAX_DEG if at_head else HEAD_MAX_DEG)
+        deltas = {**deltas, **neck}
+        rest = body.evaluate(deltas)
+        head_centre = _head_centre(rest, turn)
+        spec, free = _turned(spec, turn), _turned(free, turn)
     grips = {side: _wheel_grip(rest, side, rig) for side in ("L", "R")}
     if free:
         grips[SIDE[free["hand"]]] = _free_grip(rest, SIDE[free["hand"]], free, rig, head_centre)
-    spec = rig["phone_positions"].get(phone_position)
     if spec:
         grips[SIDE[spec["hand"]]] = _phone_grip(rest, SIDE[spec["hand"]], spec, rig, head_centre)
     for _ in range(2):   # anny's twist bones sit a few mm off the arm's axis: correct by the measured miss
@@ -184,10 +206,68 @@ def _settle(vertices: np.ndarray, boxes: dict, lower_legs: np.ndarray) -> np.nda
     return np.array([dx, 0.0, dz])
 
 
-def _head_centre(posed: Posed) -> np.ndarray:
-    """Centre of the head: midway between the ears, at eye level, a little behind the eyes."""
+def _head_centre(posed: Posed, turn: np.ndarray | None = None) -> np.ndarray:
+    """Centre of the head: midway between the ears, at eye level, a little behind the eyes (``turn``: how the
+    head is turned from looking at the road)."""
     eyes = (posed.head("eye.L") + posed.head("eye.R")) / 2
-    return eyes + np.array([-0.07, 0.0, -0.01])
+    behind = np.array([-0.07, 0.0, -0.01])
+    return eyes + (behind if turn is None else turn @ behind)
+
+
+# ---------------------------------------------------------------------- where the driver looks
+def _gaze_point(rest: Posed, look: dict, held: tuple, rig: dict, head_centre: np.ndarray) -> np.ndarray:
+    """The point a rig gaze target looks at: with ``at_hands``, the phone or else the free hand when it is held
+    below the head (``held``: the phone position's and the hand position's specs, None when not used)."""
+    if look.get("at_hands"):
+        for spec in held:
+            if spec and spec["relative_to"] != "head":
+                return _reference(rest, spec, rig, head_centre) + np.asarray(spec["offset"], float)
+    return _reference(rest, look, rig, head_centre) + np.asarray(look["offset"], float)
+
+
+def _head_turn(rest: Posed, deltas: dict, parent: dict, target: np.ndarray,
+               max_deg: dict) -> tuple[np.ndarray, dict]:
+    """The head's world rotation towards ``target`` (HEAD_SHARE of the way: first down or up, then round the
+    vertical, within ``max_deg``) and the neck and head deltas that make it, spread over NECK_SHARES on top of
+    the seated ones (every share about the same axis, so each bone adds its own share: skeleton.delta_for)."""
+    from scipy.spatial.transform import Rotation
+    eyes = (rest.head("eye.L") + rest.head("eye.R")) / 2
+    face, want = rest.rot("head") @ FACING, _unit(target - eyes)
+    limit = {k: math.radians(v) for k, v in max_deg.items()}
+    yaw = np.clip(HEAD_SHARE * _wrapped(_heading(want) - _heading(face)), -limit["yaw"], limit["yaw"])
+    pitch = np.clip(HEAD_SHARE * (_elevation(want) - _elevation(face)), -limit["down"], limit["up"])
+    turn = rotation((0, 0, 1), yaw) @ rotation(np.cross(face, (0.0, 0.0, 1.0)), pitch)
+    axis_angle = Rotation.from_matrix(turn).as_rotvec()
+    neck = {}
+    for bone, share in NECK_SHARES.items():
+        D = np.asarray(deltas.get(bone, np.eye(4)), float).copy()
+        Q = Rotation.from_rotvec(share * axis_angle).as_matrix()
+        D[:3, :3] = delta_for(rest.rot(parent[bone]), Q)[:3, :3] @ D[:3, :3]
+        neck[bone] = D
+    return turn, neck
+
+
+def _turned(spec: dict | None, turn: np.ndarray) -> dict | None:
+    """A phone or hand position held at the head, turned with it: its offset, directions and rotation."""
+    if not spec or spec["relative_to"] != "head":
+        return spec
+    out = {**spec, "offset": turn @ np.asarray(spec["offset"], float)}
+    out.update({k: turn @ np.asarray(spec[k], float) for k in ("palm", "fingers") if k in spec})
+    if "rotation_deg" in spec:
+        out["rotation"] = turn @ _spec_rotation(spec)
+    return out
+
+
+def _heading(v: np.ndarray) -> float:
+    return float(np.arctan2(v[1], v[0]))
+
+
+def _elevation(v: np.ndarray) -> float:
+    return float(np.arctan2(v[2], np.hypot(v[0], v[1])))
+
+
+def _wrapped(angle: float) -> float:
+    return float((angle + np.pi) % (2 * np.pi) - np.pi)
 
 
 # ---------------------------------------------------------------------- hands and arms
@@ -220,7 +300,7 @@ def _phone_grip(rest: Posed, side: str, spec: dict, rig: dict, head_centre: np.n
     """The phone's back in the palm, its lower half in the hand: the hand lies across the phone's width,
     pointing away from the shoulder (a right hand reading closes round the phone's left edge, seen from
     the screen) or as near the rig's ``fingers`` direction as it can, the phone's top beyond the hand."""
-    R = _euler_xyz(spec["rotation_deg"])
+    R = _spec_rotation(spec)
     xp, yp, zp = R[:, 0], R[:, 1], R[:, 2]
     centre = _reference(rest, spec, rig, head_centre) + np.asarray(spec["offset"], float)
     away = np.asarray(spec.get("fingers", centre - rest.head(f"upperarm01.{side}")), float)
@@ -263,7 +343,7 @@ def _arm(rest: Posed, side: str, grip: Grip) -> dict:
 
 def _phone_in(frame: HandFrame, spec: dict, palm_skin: float) -> tuple[np.ndarray, np.ndarray]:
     """The phone on the posed palm's skin (as ``_phone_grip`` put it), turned as the rig says."""
-    R = _euler_xyz(spec["rotation_deg"])
+    R = _spec_rotation(spec)
     return frame.palm(PHONE_ALONG, palm_skin + PHONE_THICKNESS / 2) + R[:, 1] * PHONE_SHIFT, R
 
 
@@ -289,6 +369,11 @@ def _palm_skin(posed: Posed, frame: HandFrame, side: str, model, along: float = 
 
 
 # ---------------------------------------------------------------------- helpers
+def _spec_rotation(spec: dict) -> np.ndarray:
+    """A phone position's rotation: the rig's Euler angles, or as turned with the head (``_turned``)."""
+    return spec["rotation"] if "rotation" in spec else _euler_xyz(spec["rotation_deg"])
+
+
 def _euler_xyz(degrees) -> np.ndarray:
     """Blender's XYZ Euler rotation (X first, then Y, then Z, about world axes)."""
     x, y, z = (rotation(axis, math.radians(a)) for axis, a in zip(np.eye(3), degrees))

@@ -44,9 +44,22 @@ def hands_grid(cabin: dict, limit: int | None = None) -> list[tuple]:
             for hands in cabin.get("hand_positions", {}) for gender, height, weight in corners]
 
 
+def gaze_grid(cabin: dict, limit: int | None = None) -> list[tuple]:
+    """Each of the rig's gaze targets (isu-diverse's driver_gaze), the hands on the wheel and with the phone at the
+    ear (which turns with the head), on the bodies at the classes' corners (with a ``limit``: on one)."""
+    corners = CORNERS[:1] if limit else CORNERS
+    return [(gender, height, weight, "SERIOUS", phone, None, "WHEEL", gaze)
+            for gaze in cabin.get("gaze_targets", {}) for phone in ("NONE", "P1") for gender, height, weight in corners]
+
+
+def pose_grid(cabin: dict, limit: int | None = None) -> list[tuple]:
+    """Every driver the cache is warmed with and checked on."""
+    return driver_grid(limit) + hands_grid(cabin, limit) + gaze_grid(cabin, limit)
+
+
 def warm(people: People, limit: int | None = None) -> dict:
     """Pose every driver and both children into the cache; returns counts and the time of the misses."""
-    grid = driver_grid(limit) + hands_grid(people.cabin, limit)
+    grid = pose_grid(people.cabin, limit)
     outfits = outfit_grid(limit)
     progress = Progress(len(grid) + 2 + len(outfits), label="people", verdicts=False)
     before = people.misses
@@ -73,7 +86,7 @@ def outfit_grid(limit: int | None = None) -> list[tuple]:
 def check(people: People, limit: int | None = None) -> dict:
     """Worst figures over every (cached or posed) body: clearances, belt, phone in hand."""
     worst: dict[str, tuple[float, tuple]] = {}
-    grid = driver_grid(limit) + hands_grid(people.cabin, limit)
+    grid = pose_grid(people.cabin, limit)
     progress = Progress(len(grid), label="checked", verdicts=False)
     topologies = {kind: load_entry(people.topology(kind)) for kind in ("male", "female")}
     for key in grid:
