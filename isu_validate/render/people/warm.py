@@ -3,8 +3,9 @@ body against the cabin (``isu-validate people check``).
 
 A run poses a body only on a cache miss (anny loaded once per process, ~0.9 GB, then ~1-4 s a body
 and phone position on two cores); warming poses all 704 drivers (2 genders x 4 heights x 4 weights x
-2 expressions x 11 phone positions), both children and every outfit (2 kinds x 3 hair styles x 5 tops:
-the garments and accessories cut on the rest body) once, so runs and pools never load anny. Dressing a
+2 expressions x 11 phone positions), isu-diverse's empty hands and gazes on the bodies at the classes' corners,
+both children and every outfit (2 kinds x 3 hair styles x 5 tops: the garments and accessories cut on the rest
+body) once, so runs and pools seldom load anny. Dressing a
 posed driver in an outfit needs no anny: runs do it on a miss (about a second a garment)."""
 from __future__ import annotations
 
