@@ -428,6 +428,10 @@ def test_a_gaze_the_rig_lacks_or_a_malformed_gaze_target_is_refused_with_the_fix
     bad.write_text(text.replace("offset = [0.25, -0.75, -0.02]", "offset = \"right\"", 1))
     with pytest.raises(CabinRigError, match=r"gaze_targets.PASSENGER\] needs relative_to .* offset = \[x, y, z\]"):
         load_cabin(bad)
+    bad.write_text(text.replace("[gaze_targets.MIRROR]\nrelative_to = \"head\"\noffset = [0.55, -0.42, 0.12]",
+                                "[gaze_targets]\nMIRROR = 3", 1))
+    with pytest.raises(CabinRigError, match=r"gaze_targets.MIRROR\] needs relative_to"):
+        load_cabin(bad)
 
 
 def _wheel_clearance_by_hand(state: dict, topology: dict, cabin: dict) -> dict[str, float]:

@@ -120,8 +120,8 @@ def _check(raw: dict, where: str) -> None:
                                 f"(what the hand holds there), got {spec['holds']!r}")
 
     for name, spec in raw.get("gaze_targets", {}).items():
-        if not (spec.get("relative_to") in ("head", "shoulder", "wheel") and _triple(spec.get("offset"))
-                and isinstance(spec.get("at_hands", False), bool)):
+        if not (isinstance(spec, dict) and spec.get("relative_to") in ("head", "shoulder", "wheel")
+                and _triple(spec.get("offset")) and isinstance(spec.get("at_hands", False), bool)):
             raise CabinRigError(f"{where}: [gaze_targets.{name}] needs relative_to = 'head'|'shoulder'|'wheel', "
                                 f"offset = [x, y, z] and at_hands = true|false (see rigs/cabins/default.toml)")
 
