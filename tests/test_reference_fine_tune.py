@@ -132,9 +132,14 @@ def test_retraining_a_tuned_model_with_extra_data_keeps_its_backbone(tuned, tmp_
 
 def test_the_command_line_option_defaults_to_six_blocks_and_is_off_without_it():
     from isu_validate.cli import build_parser
-    from isu_validate.commands.reference import _fine_tune
 
     parse = lambda *extra: build_parser().parse_args(["reference", "train", *extra])  # noqa: E731
+
+    def _fine_tune(args):   # what the command passes to train_reference (bench transfer's fine_tune=BLOCKS alike)
+        return FineTune.optional(args.fine_tune, args.seed)
+
     assert _fine_tune(parse()) is None
     assert _fine_tune(parse("--fine-tune", "--seed", "4")) == FineTune(blocks=6, seed=4)
     assert _fine_tune(parse("--fine-tune", "3")).blocks == 3
+    with pytest.raises(InputError, match="train 1 to 16"):   # 0 is refused, never read as "no fine-tune"
+        _fine_tune(parse("--fine-tune", "0"))

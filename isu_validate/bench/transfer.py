@@ -159,7 +159,7 @@ def _train(recipe: Recipe, folder: Path, args) -> tuple[Path, Path, str]:
                                   cache_dir=folder / "cache", log_dir=folder / "logs", device=args.render_device),
                     variety)
     try:
-        tuning = FineTune(blocks=o["fine_tune"], seed=o["seed"]) if o.get("fine_tune") else None
+        tuning = FineTune.optional(o.get("fine_tune"), o["seed"])
         train_reference(space, renderer, model, folder, o["n"], o["held_out"], o["seed"], o["preset"],
                         renderer_version=RENDERER_VERSION, device=args.device, variety=variety.describe(),
                         fine_tune=tuning)

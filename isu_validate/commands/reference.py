@@ -8,7 +8,7 @@ from pathlib import Path
 from ..devices import add_device_argument, add_render_device_argument
 from ..errors import InputError
 from ..dataset.settings import VARIETY
-from ..reference.fine_tune import FineTune as FineTuneDefaults
+from ..reference.fine_tune import FineTune
 from . import add_overwrite_option, add_variety_arguments
 
 
@@ -34,8 +34,8 @@ def register(sub) -> None:
     add_device_argument(train)
     train.add_argument("--cabin", help=f"cabin rig name or .toml path (default {DEFAULTS['cabin']})")
     add_variety_arguments(train)   # the training, held-out and checked sets alike; the card records them
-    train.add_argument("--fine-tune", type=int, nargs="?", const=FineTuneDefaults.blocks, metavar="BLOCKS",
-                       help=f"train the backbone's last BLOCKS blocks (default {FineTuneDefaults.blocks} of 16) on "
+    train.add_argument("--fine-tune", type=int, nargs="?", const=FineTune.blocks, metavar="BLOCKS",
+                       help=f"train the backbone's last BLOCKS blocks (default {FineTune.blocks} of 16) on "
                             "the training renders before fitting the heads, with crop, colour, blur and noise "
                             "augmentation; its weights go beside the heads (backbone.pt). Off by default: the "
                             "backbone stays ImageNet's, frozen")
@@ -99,7 +99,8 @@ def cmd_train_new(args) -> int:
     try:
         card = train_reference(space, renderer, out, args.workdir, args.n, args.held_out, args.seed, args.preset,
                                other_presets=checks, renderer_for=renderer_for, renderer_version=RENDERER_VERSION,
-                               device=args.device, variety=variety.describe(), fine_tune=_fine_tune(args))
+                               device=args.device, variety=variety.describe(),
+                               fine_tune=FineTune.optional(args.fine_tune, args.seed))
     finally:
         renderer.close()
     output.mark()   # the model is written last, so a refused or failed training leaves no folder behind
@@ -107,9 +108,6 @@ def cmd_train_new(args) -> int:
     _print_written(out, default_model_dir())
     return 0
 
-
-def _fine_tune(args) -> FineTuneDefaults | None:
-    return FineTuneDefaults(blocks=args.fine_tune, seed=args.seed) if args.fine_tune is not None else None
 
 
 def cmd_retrain(args) -> int:

@@ -19,7 +19,6 @@ import sys
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-
 from ..atomic import atomic_path
 from ..errors import InputError
 from .backbone import Backbone, read_rgb
@@ -46,6 +45,11 @@ class FineTune:
             raise InputError(f"--fine-tune {self.blocks}: EfficientNet-Lite0 has 16 blocks; train 1 to 16 of them")
         if self.epochs < 1 or self.batch < 1 or self.learning_rate <= 0:
             raise InputError("a fine-tune needs at least one epoch, a batch of at least 1 and a positive learning rate")
+
+    @classmethod
+    def optional(cls, blocks: int | None, seed: int) -> "FineTune | None":
+        """The settings a command's or recipe's BLOCKS asks for (None: no fine-tune; 0 is refused, not ignored)."""
+        return None if blocks is None else cls(blocks=blocks, seed=seed)
 
     @property
     def key(self) -> str:
@@ -97,7 +101,7 @@ class _Trainer:
 
         self.torch, self.settings, self.backbone = torch, settings, backbone
         model = backbone.model
-        first_tuned = len(model._blocks) - settings.blocks
+        first_tuned = BLOCKS - settings.blocks
         self.frozen_blocks, self.tuned_blocks = model._blocks[:first_tuned], model._blocks[first_tuned:]
         self.frozen = [model._conv_stem, model._bn0, *self.frozen_blocks]
         self.tuned = [*self.tuned_blocks, model._conv_head, model._bn1]
@@ -139,7 +143,7 @@ class _Trainer:
         import math
 
         s = self.settings
-        factor = (epoch + 1) / 2 if epoch == 0 else 0.5 * (1 + math.cos(math.pi * epoch / s.epochs))
+        factor = 0.5 if epoch == 0 else 0.5 * (1 + math.cos(math.pi * epoch / s.epochs))
         for group, base in zip(self.optimiser.param_groups, (s.learning_rate, s.learning_rate * 10)):
             group["lr"] = base * factor
 

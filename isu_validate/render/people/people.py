@@ -83,7 +83,7 @@ class People:
         style = style or HAIR_STYLE[kind]
         inputs = {"rig": self.driver_rig, "gender": gender, "height": height, "weight": weight,
                   "emotion": emotion, "phone_position": phone_position, "hair": style, "hands": hands,
-                  **({"gaze": gaze} if gaze != "ROAD" else {})}
+                  **_gaze_input(gaze)}
         key = entry_key("driver", inputs)
         found = self.store.get("driver", key)
         if found:
@@ -138,7 +138,7 @@ class People:
         """The expression-free pose (bone deltas), belt straps and phone placement of a driver."""
         key = entry_key("driver-pose", {"rig": self.driver_rig, "gender": gender, "height": height,
                                         "weight": weight, "phone_position": phone_position, "hands": hands,
-                                        **({"gaze": gaze} if gaze != "ROAD" else {})})
+                                        **_gaze_input(gaze)})
         found = self.store.load("driver-pose", key)
         if found:
             return found
@@ -244,6 +244,11 @@ def _surface_state(posed, topo: dict) -> dict:
     return {"vertices": vertices.astype(np.float32), "hair": shell,
             "locks": hair.lock_vertices(locks, topo["hair_faces"], shell),
             "joints": np.array([posed.head(b) for b in JOINTS], np.float32)}
+
+
+def _gaze_input(gaze: str) -> dict:
+    """A store key's gaze: none for the road, so that entries posed before gazes existed keep their keys' shape."""
+    return {} if gaze == "ROAD" else {"gaze": gaze}
 
 
 def _deltas_from(record: dict) -> dict:

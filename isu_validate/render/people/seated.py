@@ -209,9 +209,13 @@ def _settle(vertices: np.ndarray, boxes: dict, lower_legs: np.ndarray) -> np.nda
 def _head_centre(posed: Posed, turn: np.ndarray | None = None) -> np.ndarray:
     """Centre of the head: midway between the ears, at eye level, a little behind the eyes (``turn``: how the
     head is turned from looking at the road)."""
-    eyes = (posed.head("eye.L") + posed.head("eye.R")) / 2
     behind = np.array([-0.07, 0.0, -0.01])
-    return eyes + (behind if turn is None else turn @ behind)
+    return _eyes(posed) + (behind if turn is None else turn @ behind)
+
+
+def _eyes(posed: Posed) -> np.ndarray:
+    """Midway between the eyes."""
+    return (posed.head("eye.L") + posed.head("eye.R")) / 2
 
 
 # ---------------------------------------------------------------------- where the driver looks
@@ -231,8 +235,7 @@ def _head_turn(rest: Posed, deltas: dict, parent: dict, target: np.ndarray,
     vertical, within ``max_deg``) and the neck and head deltas that make it, spread over NECK_SHARES on top of
     the seated ones (every share about the same axis, so each bone adds its own share: skeleton.delta_for)."""
     from scipy.spatial.transform import Rotation
-    eyes = (rest.head("eye.L") + rest.head("eye.R")) / 2
-    face, want = rest.rot("head") @ FACING, _unit(target - eyes)
+    face, want = rest.rot("head") @ FACING, _unit(target - _eyes(rest))
     limit = {k: math.radians(v) for k, v in max_deg.items()}
     yaw = np.clip(HEAD_SHARE * _wrapped(_heading(want) - _heading(face)), -limit["yaw"], limit["yaw"])
     pitch = np.clip(HEAD_SHARE * (_elevation(want) - _elevation(face)), -limit["down"], limit["up"])
