@@ -32,6 +32,18 @@ class PatchPainter:
         cv2.imwrite(str(out), img)
 
 
+def train_painted(tmp_path_factory, name: str, painter, n_train: int, n_test: int, **options):
+    """A model trained on a painter's images with its own small backbone: (folder, card); the model in
+    folder/model, the painted sets in folder/work."""
+    from isu_validate.render import RENDERER_VERSION
+
+    folder = tmp_path_factory.mktemp(name)
+    card = train_reference(SPACE, painter, folder / "model", folder / "work", n_train=n_train, n_test=n_test, seed=3,
+                           preset="painted", backbone=Backbone(160, 120, threads=2),
+                           renderer_version=RENDERER_VERSION, **options)
+    return folder, card
+
+
 @pytest.fixture(scope="module")
 def backbone():
     return Backbone(160, 120, threads=2)

@@ -14,10 +14,9 @@ from isu_validate.reference.feature_bank import load_feature_set
 from isu_validate.reference.fine_tune import WEIGHTS_FILE, FineTune, fine_tune_backbone
 from isu_validate.reference.model import ReferenceISU
 from isu_validate.reference.retrain import retrain_with_extra
-from isu_validate.reference.training import train_reference
 from isu_validate.render import RENDERER_VERSION
 from isu_validate.space import load_space
-from tests.test_reference import PatchPainter
+from tests.test_reference import PatchPainter, train_painted
 from tests.test_reference_extra import make_dataset
 
 SPACE = load_space()
@@ -26,11 +25,7 @@ SMALL = FineTune(blocks=2, epochs=2, batch=8, seed=3)
 
 @pytest.fixture(scope="module")
 def tuned(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("tuned")
-    card = train_reference(SPACE, PatchPainter(), folder / "model", folder / "work", n_train=40, n_test=20, seed=3,
-                           preset="painted", backbone=Backbone(160, 120, threads=2),
-                           renderer_version=RENDERER_VERSION, fine_tune=SMALL)
-    return folder, card
+    return train_painted(tmp_path_factory, "tuned", PatchPainter(), 40, 20, fine_tune=SMALL)
 
 
 def test_a_tuned_model_keeps_its_weights_beside_the_heads_and_reads_with_them(tuned):

@@ -158,22 +158,48 @@ def test_scores_of_one_class_ties_and_nothing_answered():
 
 def test_answers_per_label_count_a_photo_under_each_of_its_labels_and_leave_the_unanswered_out_of_the_share():
     from isu_validate.transfer.scores import said_by_label
-    rows = [(("drinking",), "NO", "YES"), (("drinking",), "NO", "NO"), (("drinking",), "NO", None),
-            (("phone", "seatbelt"), "YES", "YES"), (("seatbelt",), "NO", "NO"), ((), "NO", "NO")]
+    rows = [(("drinking",), "NO", "YES", None), (("drinking",), "NO", "NO", None), (("drinking",), "NO", None, None),
+            (("phone", "seatbelt"), "YES", "YES", None), (("seatbelt",), "NO", "NO", None), ((), "NO", "NO", None)]
     table = said_by_label(rows, "YES")
     assert list(table) == ["(no label)", "drinking", "phone", "seatbelt"]
     assert table["drinking"] == {"n": 3, "truth": {"NO": 3}, "said": {"(unanswered)": 1, "NO": 1, "YES": 1},
-                                 "said_positive": 0.5}
+                                 "said_positive": 0.5, "auc_against_other_side": None}   # no probabilities
     assert table["seatbelt"]["n"] == 2 and table["seatbelt"]["said_positive"] == 0.5
-    assert said_by_label([(("x",), "NO", None)], "YES")["x"]["said_positive"] is None   # nothing answered
+    assert said_by_label([(("x",), "NO", None, None)], "YES")["x"]["said_positive"] is None   # nothing answered
     # a garbage answer ("MAYBE") is a third answer, not a third option: the yes/no line is still printed
     from isu_validate.transfer.scores import format_said_by_label
     sc = score([Answer("NO", "MAYBE"), Answer("NO", "YES"), Answer("YES", "YES")], ("YES", "NO"))
     assert sc["confusion"]["labels"] == ["YES", "NO", "MAYBE"]
     lines = format_said_by_label("set", {**sc, "said_by_label": said_by_label(
-        [(("drinking",), "NO", "MAYBE"), (("drinking",), "NO", "YES"), (("phone",), "YES", "YES")], "YES")})
+        [(("drinking",), "NO", "MAYBE", None), (("drinking",), "NO", "YES", None), (("phone",), "YES", "YES", None)],
+        "YES")})
     assert lines[0] == "  set: said YES per label (* truly YES; n)" and "drinking 50% (2)" in lines[1]
     assert "phone* 100% (1)" in lines[1]
+
+
+def test_each_label_is_ranked_against_the_other_side_and_a_label_ranked_above_the_positives_reads_under_half():
+    from isu_validate.transfer.scores import format_said_by_label, said_by_label
+    rows = [(("texting",), "YES", "YES", 0.9), (("texting",), "YES", "YES", 0.7), (("talking",), "YES", "NO", 0.4),
+            (("drinking",), "NO", "YES", 0.95), (("drinking",), "NO", "YES", 0.8),     # above every positive but one
+            (("safe",), "NO", "NO", 0.1), (("safe",), "NO", "NO", 0.4),                # a tie with "talking"
+            (("safe",), "NO", None, None)]                                            # unanswered: left out
+    table = said_by_label(rows, "YES")
+    assert table["drinking"]["auc_against_other_side"] == pytest.approx(1 / 6, abs=1e-4)   # 1 pair of 6 is won
+    assert table["safe"]["auc_against_other_side"] == pytest.approx(5.5 / 6, abs=1e-4)   # the tie counts half
+    assert table["texting"]["auc_against_other_side"] == pytest.approx(5 / 8, abs=1e-4)   # against all four negatives
+    assert table["talking"]["auc_against_other_side"] == pytest.approx(1.5 / 4, abs=1e-4)
+    # a mixed label (a box class on photos of both sides) stands for its majority; a tie for the negatives
+    mixed = said_by_label([(("belt",), "YES", "YES", 0.9), (("belt",), "NO", "NO", 0.2), ((), "NO", "NO", 0.5)], "YES")
+    assert mixed["belt"]["auc_against_other_side"] == 1.0   # its NO photo (0.2) below the one YES photo (0.9)
+    # one side empty: no AUC, never a division by zero
+    assert said_by_label([(("x",), "NO", "NO", 0.3)], "YES")["x"]["auc_against_other_side"] is None
+    # a probability missing where it is needed: no AUC rather than one over part of the photos
+    assert said_by_label([(("x",), "NO", "NO", None), (("y",), "YES", "YES", 0.6)], "YES")["y"][
+        "auc_against_other_side"] is None
+    sc = score([Answer(t, s, p) for _, t, s, p in rows[:-1]], ("YES", "NO"))
+    lines = format_said_by_label("set", {**sc, "said_by_label": table})
+    assert "AUC against the other side" in lines[0]
+    assert "drinking 100% (2, AUC 0.17)" in " ".join(lines) and "safe 0% (3, AUC 0.92)" in " ".join(lines)
 
 
 def test_bootstrap_interval_is_seeded_and_holds_the_estimate():
@@ -450,3 +476,17 @@ def test_a_fine_tuned_recipe_is_another_recipe_and_one_without_reads_as_before(t
     with pytest.raises(InputError, match="delete"):
         _train(tuned, folder, args)
     assert not (folder / "model").exists()
+
+
+def test_a_recipe_with_window_heads_keeps_its_feature_list_whole_and_checks_it(tmp_path):
+    from argparse import Namespace
+
+    from isu_validate.bench.transfer import _train, parse_recipe, recipe_settings
+    args = Namespace(preset="draft", n=4, held_out=2, seed=0, render_device="cpu", device="cpu")
+    both = parse_recipe("side=train:n=4,windows=phone_position,seat_belt,seed=2")
+    assert both.options == {"n": 4, "windows": "phone_position,seat_belt", "seed": 2}
+    assert "windows" not in json.loads(recipe_settings(parse_recipe("side=train:n=4"), args)[1])
+    assert json.loads(recipe_settings(both, args)[1])["windows"] == "phone_position,seat_belt"
+    with pytest.raises(InputError, match="answers a yes/no question"):   # refused before anything renders
+        _train(parse_recipe("side=train:n=4,windows=tshirt_colour"), tmp_path / "side", args)
+    assert not (tmp_path / "side" / "cache").exists()

@@ -3,9 +3,10 @@ by side, each judged by what a reference ISU trained only on them does on the re
 
 A recipe is how the training renders are made, or a model already trained from renders:
 - ``NAME=train:camera=RIG,space=SPACE,cabin=RIG,preset=P,n=N,held_out=N,seed=S,camera_jitter=...,
-  sensor_effects=...,fine_tune=BLOCKS`` (every key optional; the bench's --n, --held-out, --preset and --seed are
-  the defaults; camera_jitter and sensor_effects as ``reference train --camera-jitter/--sensor-effects`` take them,
-  commas and all; fine_tune as ``reference train --fine-tune BLOCKS``): ``reference train`` as it is, in
+  sensor_effects=...,fine_tune=BLOCKS,windows=FEATURE,...`` (every key optional; the bench's --n, --held-out,
+  --preset and --seed are the defaults; camera_jitter and sensor_effects as ``reference train
+  --camera-jitter/--sensor-effects`` take them, commas and all; fine_tune as ``reference train --fine-tune BLOCKS``;
+  windows as ``reference train --windows``): ``reference train`` as it is, in
   DIR/recipes/NAME (renders kept, so an interrupted bench goes on);
 - ``NAME=model:DIR[,renders=FOLDER]``: a model ``reference train`` made elsewhere, e.g. with another
   renderer version's checkout (``reference train --out DIR --workdir W``; its held-out renders, W/held-out,
@@ -27,8 +28,8 @@ from ..errors import InputError
 from ..transfer.arguments import add_real_set_arguments, parse_groups
 
 TRAIN_KEYS = {"camera": str, "cabin": str, "space": str, "preset": str, "n": int, "held_out": int, "seed": int,
-              "camera_jitter": str, "sensor_effects": str, "fine_tune": int}
-LISTS = ("camera_jitter", "sensor_effects")   # values that are lists themselves: pos=0.05,angle=5
+              "camera_jitter": str, "sensor_effects": str, "fine_tune": int, "windows": str}
+LISTS = ("camera_jitter", "sensor_effects", "windows")   # values that are lists themselves: pos=0.05,angle=5
 
 
 @dataclass
@@ -63,7 +64,7 @@ def parse_recipe(text: str) -> Recipe:
     options, last = {}, None
     for pair in filter(None, rest.split(",")):
         key, eq, value = pair.partition("=")
-        if last in LISTS and key not in TRAIN_KEYS:   # the next item of camera_jitter's or sensor_effects' list
+        if last in LISTS and key not in TRAIN_KEYS:   # the next item of a list-valued key's list
             options[last] += "," + pair
             continue
         last = key
@@ -115,7 +116,7 @@ def recipe_settings(recipe: Recipe, args) -> tuple[dict, str]:
     """(a train recipe's options with the bench's defaults, what its recipe.json holds: those and ``_made_with``)."""
     o = {"camera": "default", "cabin": "default", "space": "isu-paper", "preset": args.preset, "n": args.n,
          "held_out": args.held_out, "seed": args.seed, "camera_jitter": None, "sensor_effects": None,
-         **recipe.options}   # no default for fine_tune: a recipe without it reads as it did before it existed
+         **recipe.options}   # no default for fine_tune or windows: a recipe without them reads as it did before
     return o, json.dumps({**o, **_made_with(o)}, sort_keys=True)
 
 
@@ -139,6 +140,7 @@ def _made_with(options: dict) -> dict:
 def _train(recipe: Recipe, folder: Path, args) -> tuple[Path, Path, str]:
     from ..reference.fine_tune import FineTune
     from ..reference.training import train_reference
+    from ..reference.windows import WindowSettings
     from ..render import RENDERER_VERSION, open_renderer
     from ..render.variety import Variety, vary
     from ..space import load_space
@@ -155,14 +157,14 @@ def _train(recipe: Recipe, folder: Path, args) -> tuple[Path, Path, str]:
         return model, folder / "held-out", description
     space = load_space(o["space"])
     variety = Variety.parse(o["camera_jitter"], o["sensor_effects"], o["seed"])
+    tuning, windows = FineTune.optional(o.get("fine_tune"), o["seed"]), WindowSettings.parse(o.get("windows"), space)
     renderer = vary(open_renderer(preset=o["preset"], camera=o["camera"], cabin=o["cabin"], space=space,
                                   cache_dir=folder / "cache", log_dir=folder / "logs", device=args.render_device),
                     variety)
     try:
-        tuning = FineTune.optional(o.get("fine_tune"), o["seed"])
         train_reference(space, renderer, model, folder, o["n"], o["held_out"], o["seed"], o["preset"],
                         renderer_version=RENDERER_VERSION, device=args.device, variety=variety.describe(),
-                        fine_tune=tuning)
+                        fine_tune=tuning, windows=windows)
     finally:
         renderer.close()
     return model, folder / "held-out", description

@@ -9,6 +9,7 @@ from ..devices import add_device_argument, add_render_device_argument
 from ..errors import InputError
 from ..dataset.settings import VARIETY
 from ..reference.fine_tune import FineTune
+from ..reference.windows import WindowSettings
 from . import add_overwrite_option, add_variety_arguments
 
 
@@ -39,6 +40,10 @@ def register(sub) -> None:
                             "the training renders before fitting the heads, with crop, colour, blur and noise "
                             "augmentation; its weights go beside the heads (backbone.pt). Off by default: the "
                             "backbone stays ImageNet's, frozen")
+    train.add_argument("--windows", metavar="FEATURE[,FEATURE...]",
+                       help="also fit window heads for these yes/no features (e.g. phone_position): read from the "
+                            "most positive 96-px window of the frame at 640x480, trained where the render labels "
+                            "box the feature's parts; they then answer those features. Off by default")
     train.add_argument("--extra", nargs="+", type=Path, metavar="DATASET",
                        help="retrain on the --base model's own training scenes (its stored features: nothing is "
                             "rendered again) plus these datasets (`isu-validate dataset`); the card compares every "
@@ -58,7 +63,8 @@ def register(sub) -> None:
 
 
 DEFAULTS = {"n": 600, "held_out": 200, "seed": 0, "preset": "draft", "camera": "default", "cabin": "default"}
-FROM_SCRATCH = ("n", "held_out", "seed", "preset", "check_preset", "camera", "cabin", "fine_tune")
+FROM_SCRATCH = ("n", "held_out", "seed", "preset", "check_preset", "camera", "cabin", "fine_tune", "windows")
+OPTIONAL = ("fine_tune", "windows")   # claimed only when given: a model claimed before they existed resumes as before
 
 
 def cmd_train(args) -> int:
@@ -85,9 +91,9 @@ def cmd_train_new(args) -> int:
     variety = Variety.parse(args.camera_jitter, args.sensor_effects, args.seed)
     out = args.out or args.workdir / "model"  # never the shipped model unless asked for by name
     checks = dict(parse_check(spec, args.held_out) for spec in args.check_preset)
-    # fine_tune only when given: a model claimed before the option existed resumes as before
+    windows = WindowSettings.parse(args.windows, space)
     output = _claim(args, out, {"space": space.hash, **{k: getattr(args, k) for k in FROM_SCRATCH
-                                                        if k != "fine_tune" or args.fine_tune is not None},
+                                                        if k not in OPTIONAL or getattr(args, k) is not None},
                                 **{k: v for k, v in variety.describe().items() if k in VARIETY}})
 
     def renderer_for(preset: str):
@@ -100,7 +106,7 @@ def cmd_train_new(args) -> int:
         card = train_reference(space, renderer, out, args.workdir, args.n, args.held_out, args.seed, args.preset,
                                other_presets=checks, renderer_for=renderer_for, renderer_version=RENDERER_VERSION,
                                device=args.device, variety=variety.describe(),
-                               fine_tune=FineTune.optional(args.fine_tune, args.seed))
+                               fine_tune=FineTune.optional(args.fine_tune, args.seed), windows=windows)
     finally:
         renderer.close()
     output.mark()   # the model is written last, so a refused or failed training leaves no folder behind

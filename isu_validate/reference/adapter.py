@@ -29,8 +29,10 @@ class ReferenceAdapter:
         self.device = self.model.backbone.device.describe()   # where its torch work runs (summaries name it)
         heads = hashlib.sha1((model_dir / "heads.npz").read_bytes()).hexdigest()[:12]
         clip = self.model.meta.get("clip_sigma")    # how the heads read features; absent before clipping,
+        windows = self.model.meta.get("windows")     # and how window heads read frames (their calibration too),
         self.fingerprint = fingerprint("reference", self.id,   # so older models keep their fingerprints
-                                       {"heads": heads, **({"clip_sigma": clip} if clip is not None else {})})
+                                       {"heads": heads, **({"clip_sigma": clip} if clip is not None else {}),
+                                        **({"windows": windows} if windows else {})})
         self.model_version = f"model {model_dir.resolve()}, heads {heads}"   # what a replay names
 
     def send(self, request: SUTRequest) -> Exchange:

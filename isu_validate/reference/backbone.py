@@ -83,6 +83,23 @@ class Backbone:
         out = [self._batch(images[i:i + batch]) for i in range(0, len(images), batch)]
         return np.concatenate(out) if out else np.zeros((0, self.dim), np.float32)
 
+    def windows(self, image: np.ndarray, cells: int, height: int) -> np.ndarray:
+        """One RGB uint8 image -> (rows, columns, 1280) float32: the last convolution's map of the image scaled to
+        ``height`` pixels high, its aspect kept (a phone squashed is no phone's shape; the map is as wide as the
+        image), averaged over every ``cells`` x ``cells`` window of its 32-pixel cells, stride one cell
+        (``windows.py``'s heads read them)."""
+        import cv2
+
+        torch = self.torch
+        h, w = image.shape[:2]
+        width = max(int(round(w * height / h)), cells * 32)   # at least one window across an absurdly narrow image
+        resized = cv2.resize(image, (width, height), interpolation=cv2.INTER_AREA)
+        x = self.normalise(torch.from_numpy(resized).permute(2, 0, 1)[None].to(self.device.name).float())
+        with torch.inference_mode():
+            fmap = self.model.extract_features(x)
+            pooled = torch.nn.functional.avg_pool2d(fmap, cells, stride=1)
+        return pooled[0].permute(1, 2, 0).cpu().numpy().astype(np.float32)
+
     def pixels(self, images: list[np.ndarray]):
         """RGB uint8 images (any size) -> the (n, 3, height, width) uint8 tensor the backbone reads, on the CPU:
         the one resize that reading and fine-tuning share."""

@@ -72,29 +72,52 @@ def fit_head(feature: str, X: np.ndarray, y: list[str], C: float = REGULARISATIO
     return Head(feature, [str(c) for c in model.classes_], mean, scale, model.coef_, model.intercept_)
 
 
-def save_heads(heads: list[Head], folder: Path, meta: dict) -> None:
+WINDOW_PREFIX = "window."   # window heads' arrays in heads.npz (``windows.py``)
+
+
+def save_heads(heads: list[Head], folder: Path, meta: dict, window_heads: list[Head] = ()) -> None:
+    """Whole-frame heads and any window heads (``windows.py``) in one ``heads.npz``, their classes in ``heads.json``."""
     folder.mkdir(parents=True, exist_ok=True)
     arrays = {}
-    for h in heads:
-        for part in ("mean", "scale", "weight", "bias"):
-            arrays[f"{h.feature}.{part}"] = getattr(h, part).astype(np.float32)
+    for prefix, group in (("", heads), (WINDOW_PREFIX, window_heads)):
+        for h in group:
+            for part in ("mean", "scale", "weight", "bias"):
+                arrays[f"{prefix}{h.feature}.{part}"] = getattr(h, part).astype(np.float32)
     np.savez_compressed(folder / "heads.npz", **arrays)
-    clips = {h.clip for h in heads}
+    clips = {h.clip for h in [*heads, *window_heads]}
     if len(clips) > 1:
         raise ValueError(f"heads clipped differently ({sorted(clips, key=str)}) cannot share one model folder")
     clip = {"clip_sigma": clips.pop()} if heads and None not in clips else {}
+    windows = {"window_heads": {h.feature: h.classes for h in window_heads}} if window_heads else {}
     (folder / "heads.json").write_text(json.dumps(
-        dict(meta, **clip, heads={h.feature: h.classes for h in heads}), indent=2))
+        dict(meta, **clip, heads={h.feature: h.classes for h in heads}, **windows), indent=2))
 
 
 def load_heads(folder: Path) -> tuple[list[Head], dict]:
+    """The whole-frame heads and the model's meta (``load_window_heads`` reads the window heads)."""
+    meta, arrays = _read(folder)
+    return _heads(meta["heads"], arrays, "", meta), meta
+
+
+def load_window_heads(folder: Path, meta: dict) -> list[Head]:
+    """The model's window heads (none for a model without them)."""
+    if not meta.get("window_heads"):
+        return []
+    return _heads(meta["window_heads"], _read(folder)[1], WINDOW_PREFIX, meta)
+
+
+def _read(folder: Path) -> tuple[dict, dict]:
     meta_path, array_path = folder / "heads.json", folder / "heads.npz"
     if not meta_path.exists() or not array_path.exists():
         raise InputNotFound(f"no trained reference ISU in {folder} (heads.json/heads.npz missing); "
                                 "train one with `isu-validate reference train`")
     meta = json.loads(meta_path.read_text())
     with np.load(array_path) as arrays:
-        heads = [Head(f, classes, *(arrays[f"{f}.{p}"].astype(np.float64) for p in ("mean", "scale", "weight", "bias")),
-                      clip=meta.get("clip_sigma"))
-                 for f, classes in meta["heads"].items()]
-    return heads, meta
+        return meta, {k: arrays[k] for k in arrays.files}
+
+
+def _heads(classes_by_feature: dict, arrays: dict, prefix: str, meta: dict) -> list[Head]:
+    parts = ("mean", "scale", "weight", "bias")
+    clip = meta.get("clip_sigma")
+    return [Head(f, classes, *(arrays[f"{prefix}{f}.{p}"].astype(np.float64) for p in parts), clip=clip)
+            for f, classes in classes_by_feature.items()]

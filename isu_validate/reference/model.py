@@ -9,7 +9,8 @@ from ..paths import data_dir
 from ..space import SceneSpace
 from .backbone import Backbone, read_rgb
 from .captioner import describe
-from .heads import load_heads
+from .heads import load_heads, load_window_heads
+from .windows import WindowSettings, frame_probabilities
 from ..errors import InputError
 
 
@@ -42,6 +43,9 @@ class ReferenceISU:
             raise InputError(f"the reference ISU in {self.model_dir} was trained for features {sorted(unknown)} "
                              f"that space {space.name!r} does not have; retrain it for this space")
         self.backbone = backbone or backbone_of(self.model_dir, self.meta, device)
+        # window heads (windows.py) answer their features in place of the whole-frame heads
+        self.window_heads = load_window_heads(self.model_dir, self.meta)
+        self.windows = WindowSettings.from_meta(self.meta["windows"]) if self.window_heads else None
 
     def predict(self, image: Path) -> dict[str, str]:
         """An answer for every feature it has a head for; NONE where its own answers say the
@@ -51,9 +55,13 @@ class ReferenceISU:
     def read(self, image: Path) -> tuple[dict[str, str], dict[str, dict[str, float]]]:
         """(answers as ``predict`` gives them, each head's class probabilities): the probabilities are what
         a ROC curve of the model needs (``transfer``'s AUC); the answers are their argmax, made NONE as above."""
-        features = self.backbone.features([read_rgb(image)])
+        rgb = read_rgb(image)
+        features = self.backbone.features([rgb])
         probabilities = {name: dict(zip(head.classes, map(float, head.probabilities(features)[0]), strict=True))
                          for name, head in self.heads.items()}
+        if self.windows:
+            maps = self.windows.maps(self.backbone, rgb)
+            probabilities.update(frame_probabilities(self.window_heads, self.meta["windows"]["calibration"], maps))
         raw = {name: max(p, key=p.get) for name, p in probabilities.items()}
         answers = {name: (answer if self._active(name, raw) else "NONE") for name, answer in raw.items()}
         return answers, probabilities

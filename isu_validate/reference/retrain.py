@@ -45,6 +45,10 @@ def retrain_with_extra(space, base: Path, extra: list[ExtraSet], out: Path, rend
                         f"the base model's features (in {base}) with",
                         "render the dataset again with the current renderer")
     base_heads, base_meta = load_heads(Path(base))
+    if base_meta.get("window_heads"):
+        raise InputError(f"the model in {base} answers {', '.join(base_meta['window_heads'])} from window heads, "
+                         "which --extra cannot retrain (it keeps whole-frame features only); train a new model with "
+                         "`reference train --windows` on the scenes you would add, or use a base without windows")
     backbone = backbone or backbone_of(Path(base), base_meta, device)
     if backbone.name != train.meta["backbone"] or list(backbone.size) != list(train.meta["input_size"]):
         raise InputError(f"the features in {base} come from {train.meta['backbone']} at {train.meta['input_size']}, "

@@ -25,6 +25,7 @@ from .backbone import Backbone, read_rgb
 from .feature_bank import FILES, FeatureSet, save_bank
 from .fine_tune import WEIGHTS_FILE, FineTune, fine_tune_backbone, save_tuned
 from .heads import CLIP_SIGMA, REGULARISATION_C, Head, fit_head, save_heads
+from .windows import WindowSettings, fit_window_heads, frame_probabilities, label_of, save_held_out
 from ..errors import InputError
 
 
@@ -154,19 +155,28 @@ def fit_heads(space: SceneSpace, X: np.ndarray, scenes: list[dict], seed: int) -
 
 def accuracy(space: SceneSpace, heads: list[Head], X: np.ndarray, scenes: list[dict]) -> dict:
     """Per-feature held-out accuracy, overall and split by external light level."""
+    answers = [{} for _ in scenes]
+    for head in heads:
+        rows = [i for i, scene in enumerate(scenes) if head.feature in scene]
+        for i, answer in zip(rows, head.predict(X[rows]) if rows else [], strict=True):
+            answers[i][head.feature] = answer
+    return answer_accuracy(space, answers, scenes)
+
+
+def answer_accuracy(space: SceneSpace, answers: list[dict[str, str]], scenes: list[dict]) -> dict:
+    """Per-feature accuracy of answers given per scene (a feature a scene lacks is not asked), overall and split
+    by external light level."""
     by_light: dict[str, dict[str, list[bool]]] = defaultdict(lambda: defaultdict(list))
     overall: dict[str, list[bool]] = defaultdict(list)
-    for head in heads:
-        feature = space.features[head.feature]
-        rows = [i for i, scene in enumerate(scenes) if head.feature in scene]
-        if not rows:
-            continue
-        predicted = head.predict(X[rows])
-        for i, answer in zip(rows, predicted):
-            correct = answer == feature.truth(scenes[i][head.feature])
-            overall[head.feature].append(correct)
-            by_light[scenes[i].get("external_light", "-")][head.feature].append(correct)
-    summarise = lambda d: {k: {"accuracy": float(np.mean(v)), "n": len(v)} for k, v in d.items()}  # noqa: E731
+    for said, scene in zip(answers, scenes, strict=True):
+        for name, answer in said.items():
+            if name not in scene:
+                continue
+            correct = answer == space.features[name].truth(scene[name])
+            overall[name].append(correct)
+            by_light[scene.get("external_light", "-")][name].append(correct)
+    def summarise(d):   # in the space's order of features, as the heads are
+        return {k: {"accuracy": float(np.mean(d[k])), "n": len(d[k])} for k in space.features if k in d}
     return {"per_feature": summarise(overall),
             "by_external_light": {light: summarise(d) for light, d in sorted(by_light.items())}}
 
@@ -175,14 +185,16 @@ def train_reference(space: SceneSpace, renderer, out: Path, workdir: Path, n_tra
                     seed: int, preset: str, backbone: Backbone | None = None,
                     other_presets: Mapping[str, int] | None = None,
                     renderer_for: Callable[[str], object] | None = None, renderer_version: str = "",
-                    device: str = "auto", variety: dict | None = None, fine_tune: FineTune | None = None) -> dict:
+                    device: str = "auto", variety: dict | None = None, fine_tune: FineTune | None = None,
+                    windows: WindowSettings | None = None) -> dict:
     """Render, embed, fit and write the heads, the model card and the features of both sets (so that
     ``reference train --extra`` never renders them again). ``other_presets`` maps a preset name to how
     many of the held-out scenes to render at it as well (``renderer_for(name)`` opens a renderer for
     it, closed here). ``device``: where the backbone runs (``devices.py``), named in the card. ``variety``:
     the camera jitter and sensor effects the renderers apply (``render.variety.Variety.describe()``), recorded
     in the card and the stored features; {} or None for the camera file's frames. ``fine_tune``: train the
-    backbone's last blocks on the training renders first (``fine_tune.py``; a checkpoint in ``workdir`` resumes it)."""
+    backbone's last blocks on the training renders first (``fine_tune.py``; a checkpoint in ``workdir`` resumes it).
+    ``windows``: fit window heads for these yes/no features too (``windows.py``), which then answer them."""
     start = time.time()
     train_scenes = balanced_scenes(space, n_train, np.random.default_rng(seed))
     test_scenes = balanced_scenes(space, n_test, np.random.default_rng(seed + 10_000))
@@ -201,11 +213,52 @@ def train_reference(space: SceneSpace, renderer, out: Path, workdir: Path, n_tra
         name: (embed(backbone, examples), [e.scene for e in examples]) for name, examples in others.items()})
     card["hidden_from_camera"] = {"training": hidden_counts(space, train_scenes, train),
                                   "held_out": hidden_counts(space, test_scenes, test)}
+    window_heads, window_held_out = (_fit_windows(space, windows, backbone, train, {preset: test, **others}, seed,
+                                                  card) if windows else ([], None))
     card.update({"render_preset": preset, "renderer": renderer_version, "device": backbone.device.describe(),
                  "train_seconds": round(time.time() - start, 1), **({"variety": variety} if variety else {}),
                  **({"fine_tune": tuning} if tuning else {})})
-    write_model(out, heads, card, bank, backbone=backbone)
+    write_model(out, heads, card, bank, backbone=backbone, window_heads=window_heads, window_held_out=window_held_out)
     return card
+
+
+def _fit_windows(space: SceneSpace, settings: WindowSettings, backbone: Backbone, train: list[Example],
+                 held_out: dict[str, list[Example]], seed: int, card: dict) -> tuple[list[Head], list[dict]]:
+    """Fit the window heads; the card's figures for their features (training, held-out at every preset) become
+    theirs, the whole-frame heads' kept beside them under ``windows``. Returns the heads and their answers on the
+    held-out scenes of the training preset (``windows.save_held_out``)."""
+    started = time.time()
+    heads, calibration, counts, training_read = fit_window_heads(
+        space, settings, backbone, [e.image for e in train], [e.scene for e in train],
+        [label_of(e.image) for e in train], seed)
+    whole = card["held_out_by_preset"]
+    card["windows"] = {**settings.describe(), "calibration": calibration, "training_windows": counts,
+                       "whole_frame_held_out": {n: whole[card["render_preset"]]["per_feature"].get(n)
+                                                for n in settings.features}}
+    card["training"].update(answer_accuracy(space, _answers(training_read), [e.scene for e in train])["per_feature"])
+    read_at = {}
+    for preset, examples in held_out.items():
+        figures, read_at[preset] = _window_accuracy(space, settings, heads, calibration, backbone, examples)
+        whole[preset]["per_feature"].update(figures["per_feature"])
+        for light, by_feature in figures["by_external_light"].items():
+            whole[preset]["by_external_light"].setdefault(light, {}).update(by_feature)
+    card["held_out"] = whole[card["render_preset"]]
+    card["windows"]["seconds"] = round(time.time() - started, 1)
+    return heads, read_at[card["render_preset"]]
+
+
+def _window_accuracy(space: SceneSpace, settings: WindowSettings, heads: list[Head], calibration: dict,
+                     backbone: Backbone, examples: list[Example]) -> tuple[dict, list[dict]]:
+    """(the window heads' accuracy on ``examples``, their class probabilities per example: {} where not asked)."""
+    read = [frame_probabilities([h for h in heads if h.feature in e.scene], calibration,
+                                settings.maps(backbone, read_rgb(e.image)))
+            if any(n in e.scene for n in settings.features) else {} for e in examples]
+    return answer_accuracy(space, _answers(read), [e.scene for e in examples]), read
+
+
+def _answers(read: list[dict[str, dict[str, float]]]) -> list[dict[str, str]]:
+    """Each frame's most probable class per feature."""
+    return [{n: max(p, key=p.get) for n, p in probabilities.items()} for probabilities in read]
 
 
 def _fine_tune(space: SceneSpace, backbone: Backbone, train: list[Example], settings: FineTune, workdir: Path) -> dict:
@@ -238,13 +291,19 @@ def fit_and_describe(space: SceneSpace, train: FeatureSet, held_out: FeatureSet,
 
 
 def write_model(out: Path, heads: list[Head], card: dict, bank: list[FeatureSet] | None,
-                markdown: Callable[[dict], str] | None = None, backbone: Backbone | None = None) -> None:
-    """Heads, card and stored features; a tuned backbone's weights beside them (``heads.json`` names the file)."""
+                markdown: Callable[[dict], str] | None = None, backbone: Backbone | None = None,
+                window_heads: list[Head] = (), window_held_out: list[dict] | None = None) -> None:
+    """Heads (and window heads), card and stored features; a tuned backbone's weights beside them (``heads.json``
+    names the file)."""
     meta = {k: card[k] for k in ("backbone", "input_size", "space", "space_hash", "seed")}
+    if window_heads:
+        meta["windows"] = {k: card["windows"][k] for k in ("features", "input_size", "cells", "calibration")}
     if backbone is not None and backbone.tuned_blocks:
         out.mkdir(parents=True, exist_ok=True)
         meta["backbone_weights"] = save_tuned(backbone, out)
-    save_heads(heads, out, meta)
+    save_heads(heads, out, meta, window_heads)
+    if window_held_out is not None:
+        save_held_out(out, window_held_out)
     if bank:
         save_bank(out, *bank)
     (out / "model_card.json").write_text(json.dumps(card, indent=2))
@@ -282,11 +341,13 @@ def model_card_markdown(card: dict) -> str:
              f"- Held-out set: {card['held_out_scenes']} scenes, seed {card['seed'] + 10_000}{also}",
              *_variety_lines(card.get("variety")),
              *_fine_tune_lines(card.get("fine_tune")),
+             *_window_lines(card.get("windows")),
              *_hidden_lines(card.get("hidden_from_camera")),
              f"- Reproduce: `isu-validate reference train --n {card['training_scenes']} "
              f"--held-out {card['held_out_scenes']} --seed {card['seed']} --preset {card['render_preset']}{reproduce}"
              + _variety_flags(card.get("variety"))
-             + (f" --fine-tune {card['fine_tune']['blocks']}" if card.get("fine_tune") else "") + "`",
+             + (f" --fine-tune {card['fine_tune']['blocks']}" if card.get("fine_tune") else "")
+             + (f" --windows {','.join(card['windows']['features'])}" if card.get("windows") else "") + "`",
              f"- Stored features: `{FILES['train']}` and `{FILES['held_out']}` hold the backbone features (float32), "
              "scenes and renderer version of both sets, so `isu-validate reference train --extra DATASET...` "
              "retrains on them plus the dataset without rendering them again, and compares on the same held-out scenes",
@@ -336,6 +397,19 @@ def _fine_tune_lines(tuning: dict | None) -> list[str]:
             f"renders for {tuning['epochs']} epochs (lr {tuning['learning_rate']:g}, batch {tuning['batch']}, crops, "
             f"colour, grey, blur and sensor noise; every predicted feature at once), {tuning['seconds']:.0f} s; "
             f"the heads were fitted on the tuned features. Weights: `{WEIGHTS_FILE}`"]
+
+
+def _window_lines(windows: dict | None) -> list[str]:
+    if not windows:
+        return []
+    w, h = windows["input_size"]
+    before = "; ".join(f"{name} {fig['accuracy']:.3f}" for name, fig in windows["whole_frame_held_out"].items() if fig)
+    counts = "; ".join(f"{name} {c['YES']} showing it, {c['NO']} not"
+                       for name, c in windows["training_windows"].items())
+    return [f"- Window heads: {', '.join(f'`{n}`' for n in windows['features'])} answered from the most positive "
+            f"{windows['cells']}x{windows['cells']}-cell window of the backbone's map of the frame at {w}x{h} "
+            f"(trained on the render labels' part boxes; windows: {counts}); their rows below are the window heads'. "
+            f"The whole-frame heads' held-out accuracy: {before or '-'}"]
 
 
 def _variety_flags(variety: dict | None) -> str:

@@ -200,8 +200,9 @@ def _scores(records: list[dict], space: SceneSpace, features: list[str], seed: i
         if answers:
             out[feature] = score(answers, options, seed)
         if any(r.get("labels") for r in asked):
-            out[feature]["said_by_label"] = said_by_label(
-                [(tuple(r.get("labels") or ()), r["truth"][feature], r["said"].get(feature)) for r in asked], positive)
+            rows = [(tuple(r.get("labels") or ()), a.truth, a.said, a.p_positive)
+                    for r, a in zip(asked, answers, strict=True)]
+            out[feature]["said_by_label"] = said_by_label(rows, positive)
     return out
 
 

@@ -4,8 +4,9 @@ Two sources, the first that applies:
 - ``--renders DATASET`` (a folder ``isu-validate dataset`` wrote): its renders are asked the same questions
   through the same SUT, the truth from each slot's scene; its images are also the render side of KID/FID.
 - a reference ISU model folder (``--model``, or ``--sut reference``): its own held-out renders, from the
-  backbone features stored beside its heads (``held_out_features.npz``): the figures its card reports,
-  with no image rendered again. No images, so no KID without ``--renders``.
+  backbone features stored beside its heads (``held_out_features.npz``; a window head's answers from
+  ``held_out_windows.json``): the figures its card reports, with no image rendered again. No images, so no
+  KID without ``--renders``.
 A folder of plain images as ``--renders`` gives KID/FID only (no truth to score against).
 """
 from __future__ import annotations
@@ -75,14 +76,18 @@ def held_out_records(model_dir: Path, space: SceneSpace, features: list[str]) ->
     """Records (as ``ask.ask_all`` makes them) of the reference model in ``model_dir`` on its own held-out
     renders, from their stored features; and what those renders were (renderer, preset, n)."""
     from ..reference.feature_bank import FILES, load_feature_set
-    from ..reference.heads import load_heads
+    from ..reference.heads import load_heads, load_window_heads
+    from ..reference.windows import load_held_out
 
     path = model_dir / FILES["held_out"]
     if not path.is_file():
         raise InputNotFound(f"the model in {model_dir} keeps no held-out features ({FILES['held_out']}); give a "
                             "render set with --renders, or retrain it with `isu-validate reference train`")
     held_out = load_feature_set(path)
-    heads = {h.feature: h for h in load_heads(model_dir)[0]}
+    heads, meta = load_heads(model_dir)
+    heads = {h.feature: h for h in heads}
+    windows = {h.feature for h in load_window_heads(model_dir, meta)}
+    window_read = load_held_out(model_dir) if windows else []
     if held_out.meta.get("space_hash") != space.hash:
         trained_in = held_out.meta.get("space")
         fix = (f"the space file changed since (hash {held_out.meta.get('space_hash')} then, {space.hash} now): retrain "
@@ -95,7 +100,10 @@ def held_out_records(model_dir: Path, space: SceneSpace, features: list[str]) ->
         rows = [i for i, scene in enumerate(held_out.scenes) if feature in scene]
         if not rows:
             continue
-        p = head.probabilities(held_out.features[rows].astype(np.float64))
+        if feature in windows:   # answered from windows: their stored answers, not the whole-frame head's
+            p = np.array([[window_read[i][feature][c] for c in head.classes] for i in rows])
+        else:
+            p = head.probabilities(held_out.features[rows].astype(np.float64))
         for i, probs in zip(rows, p, strict=True):
             records.append({"name": f"{i:05d}", "truth": {feature: space.features[feature].truth(
                 held_out.scenes[i][feature])}, "said": {feature: head.classes[int(np.argmax(probs))]},

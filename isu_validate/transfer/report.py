@@ -99,7 +99,9 @@ def _by_label(name: str, sc: dict) -> str:
     def counts(c):
         return ", ".join(f"{k} {v}" for k, v in c.items())
     rows = [{"label": label, "photos": e["n"], "true answers": counts(e["truth"]), "said": counts(e["said"]),
-             "share said positive": fmt(e["said_positive"])} for label, e in sc["said_by_label"].items()]
+             "share said positive": fmt(e["said_positive"]),
+             "AUC against the other side": fmt(e.get("auc_against_other_side"))}
+            for label, e in sc["said_by_label"].items()]
     return f"<h3>real: {esc(name)}: answers per label of the set</h3>" + table(list(rows[0]), rows)
 
 

@@ -63,23 +63,50 @@ def score(answers: list[Answer], options: tuple[str, ...] | list[str], seed: int
     return out
 
 
-def said_by_label(rows: list[tuple[tuple[str, ...], str, str | None]], positive: str) -> dict:
+def said_by_label(rows: list[tuple[tuple[str, ...], str, str | None, float | None]], positive: str) -> dict:
     """Per label of the real set (its class folder, a box class; a photo counts under each of its labels):
     how many photos, their true answers, what the SUT said, and the share it said ``positive`` among those
-    it answered. Where a SUT's false answers come from: State Farm's drinking photos read as a phone."""
+    it answered. Where a SUT's false answers come from: State Farm's drinking photos read as a phone.
+
+    A row is (labels, truth, said, P(positive) or None). Where the SUT gave probabilities, each label also
+    gets ``auc_against_other_side``: how well the SUT ranks this label's photos against the other side of
+    the question (a label of positive photos against every negative photo of the set, a label of negative
+    photos against every positive one). An AUC under 0.5 names a label the SUT finds more positive than the
+    positives themselves: a confusion, not noise in the threshold."""
     table: dict[str, dict] = {}
-    for labels, truth, said in rows:
+    for labels, truth, said, p in rows:
         for label in labels or ("(no label)",):
-            entry = table.setdefault(label, {"n": 0, "truth": Counter(), "said": Counter()})
+            entry = table.setdefault(label, {"n": 0, "truth": Counter(), "said": Counter(), "p": []})
             entry["n"] += 1
             entry["truth"][truth] += 1
             entry["said"][said or "(unanswered)"] += 1
+            if said is not None:
+                entry["p"].append((truth == positive, p))
+    scored = [(truth == positive, p) for _, truth, said, p in rows if said is not None]
     out = {}
     for label, e in sorted(table.items()):
         answered = e["n"] - e["said"].get("(unanswered)", 0)
         out[label] = {"n": e["n"], "truth": dict(sorted(e["truth"].items())), "said": dict(sorted(e["said"].items())),
-                      "said_positive": e["said"].get(positive, 0) / answered if answered else None}
+                      "said_positive": e["said"].get(positive, 0) / answered if answered else None,
+                      "auc_against_other_side": _auc_against_other_side(e["p"], scored,
+                                                                        _side(e["truth"], positive))}
     return out
+
+
+def _side(truth: Counter, positive: str) -> bool:
+    """Whether a label stands for the positive side: most of its photos are truly positive (ties: negative)."""
+    return truth.get(positive, 0) > sum(truth.values()) / 2
+
+
+def _auc_against_other_side(label: list[tuple[bool, float | None]], everyone: list[tuple[bool, float | None]],
+                            positive_side: bool) -> float | None:
+    """AUC of a label's photos on its side against every photo of the set on the other side; None where a
+    photo involved has no probability or either side is empty."""
+    mine = [p for is_positive, p in label if is_positive == positive_side]
+    theirs = [p for is_positive, p in everyone if is_positive != positive_side]
+    if any(p is None for p in mine + theirs):
+        return None
+    return auc(mine, theirs) if positive_side else auc(theirs, mine)
 
 
 BY_LABEL_SHOWN = 24   # labels printed per set (the most photos first); all of them are in summary.json
@@ -87,16 +114,21 @@ BY_LABEL_SHOWN = 24   # labels printed per set (the most photos first); all of t
 
 def format_said_by_label(name: str, sc: dict) -> list[str]:
     """For a yes/no feature: the share of each of the set's labels the SUT answered positive, a label whose
-    photos are truly positive marked *: where false answers come from."""
+    photos are truly positive marked *, and where the SUT gave probabilities how it ranks the label against the
+    other side (``auc_against_other_side``): where false answers come from."""
     table = sc.get("said_by_label")
     if not table or len(sc["options"]) != 2:
         return []
     positive = positive_class(sc["options"])
     shown = sorted(table.items(), key=lambda kv: -kv[1]["n"])[:BY_LABEL_SHOWN]
-    cells = [f"{label}{'*' if max(e['truth'], key=e['truth'].get) == positive else ''} "
-             f"{'-' if e['said_positive'] is None else format(e['said_positive'], '.0%')} ({e['n']})"
+    ranked = any(e.get("auc_against_other_side") is not None for _, e in shown)
+    cells = [f"{label}{'*' if _side(Counter(e['truth']), positive) else ''} "
+             f"{'-' if e['said_positive'] is None else format(e['said_positive'], '.0%')} ({e['n']}"
+             + (f", AUC {_fmt_auc(e.get('auc_against_other_side'))})" if ranked else ")")
              for label, e in sorted(shown)]
-    head = f"  {name}: said {positive} per label (* truly {positive}; n)"
+    head = (f"  {name}: said {positive} per label (* truly {positive}; n"
+            + (", AUC against the other side: under 0.5, ranked more positive than the positives" if ranked else "")
+            + ")")
     lines, line = [head], "   "
     for cell in cells:
         if len(line) + len(cell) > 100:
@@ -104,6 +136,10 @@ def format_said_by_label(name: str, sc: dict) -> list[str]:
             line = "   "
         line += f" {cell}"
     return lines + [line] + ([f"    ... and {len(table) - len(shown)} more labels"] if len(table) > len(shown) else [])
+
+
+def _fmt_auc(value: float | None) -> str:
+    return "-" if value is None else f"{value:.2f}"
 
 
 def _median_p(answered: list[Answer]) -> float | None:

@@ -1,0 +1,229 @@
+"""Window heads: a yes/no feature read where its object is in the frame, not from the whole frame's features.
+
+Why: a phone in a driver's hand fills about a hundredth of the frame. Averaged over the whole frame its trace is
+faint, and a head fitted on renders learns the pose round it instead, which real drivers strike without a phone
+(State Farm's drinking photos ranked above its phone photos in every whole-frame recipe). The renders know where
+the phone is (the instance boxes of their labels), so a head can learn what a phone looks like where it is.
+
+How: the backbone runs once over the frame scaled to ``INPUT``'s height (480 px, where a phone is some 30-60 px; the
+aspect kept, so a square or wide photo gives a narrower or wider map); its last map (20 x 15 cells of 32 px for a
+4:3 frame) is averaged over every ``CELLS`` x ``CELLS`` window (96 px). Training: a window whose
+centre lies within ``NEAR`` cells of the centre of the feature's part box (``visible_parts`` in the render label)
+is a positive; ``NEGATIVES`` windows drawn per render, clear of the box or from a render whose answer is the
+negative one, are negatives. One logistic head per feature on those window features (``heads.fit_head``); a
+frame's P(YES) is its most positive window's log-odds, calibrated on the training frames (``_calibrate``).
+Measured in the README ("Where the phone is").
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+from .backbone import Backbone, read_rgb
+from .heads import Head, fit_head
+
+INPUT = (640, 480)   # a render's frame as the window backbone reads it: other frames are scaled to its height
+CELLS = 3            # a window is CELLS x CELLS cells of the last map
+CELL_PX = 32         # one cell of EfficientNet-Lite0's last map, in input pixels
+NEAR = 1.0           # a positive window's centre is within this many cells of the part box's centre, either way
+NEGATIVES = 8        # negative windows drawn per training render
+
+
+@dataclass(frozen=True)
+class WindowSettings:
+    """Which features get window heads, and the frame size and window they read (the model card records it)."""
+    features: tuple[str, ...]
+    input_size: tuple[int, int] = INPUT
+    cells: int = CELLS
+
+    @classmethod
+    def parse(cls, text: str | None, space) -> "WindowSettings | None":
+        """``FEATURE[,FEATURE...]`` (None: no window heads), each checked against the space."""
+        if text is None:
+            return None
+        names = tuple(dict.fromkeys(n.strip() for n in str(text).split(",") if n.strip()))
+        if not names:
+            raise InputError("--windows: name the yes/no features to read from windows, e.g. --windows phone_position")
+        for name in names:
+            _check(space, name)
+        return cls(names)
+
+    @classmethod
+    def from_meta(cls, meta: dict) -> "WindowSettings":
+        return cls(tuple(meta["features"]), tuple(meta["input_size"]), int(meta["cells"]))
+
+    def describe(self) -> dict:
+        return {"features": list(self.features), "input_size": list(self.input_size), "cells": self.cells}
+
+    def maps(self, backbone: Backbone, rgb: np.ndarray) -> np.ndarray:
+        """The window features of a frame: (rows, columns, 1280)."""
+        return backbone.windows(rgb, self.cells, self.input_size[1])
+
+
+def _check(space, name: str) -> None:
+    feature = space.features.get(name)
+    if feature is None or not feature.predicted:
+        raise InputError(f"--windows {name}: space {space.name!r} has no predicted feature {name!r}; predicted: "
+                         + ", ".join(f.name for f in space.predicted))
+    if sorted(feature.options) != ["NO", "YES"]:
+        raise InputError(f"--windows {name}: a window head answers a yes/no question, and {name!r} asks "
+                         f"{'/'.join(feature.options)}")
+    if not feature.visible_parts:
+        raise InputError(f"--windows {name}: the space names no render part that shows {name!r} (visible_parts), "
+                         "so no render says where it is")
+
+
+def part_box(label: dict, parts, scale: tuple[float, float]) -> tuple[float, float, float, float] | None:
+    """The box round every pixel of ``parts`` in a render label (frame pixels scaled by ``scale``), or None."""
+    boxes = [label["visible"][p]["bbox"] for p in parts if (label.get("visible") or {}).get(p, {}).get("bbox")]
+    if not boxes:
+        return None
+    b = np.array(boxes, float)
+    return (b[:, 0].min() * scale[0], b[:, 1].min() * scale[1], (b[:, 2].max() + 1) * scale[0],
+            (b[:, 3].max() + 1) * scale[1])
+
+
+def training_windows(maps: np.ndarray, answer: str, box, cells: int, rng: np.random.Generator
+                     ) -> tuple[list[np.ndarray], list[str]]:
+    """A render's training windows: YES windows centred on the part's box, NO windows clear of it (a YES render
+    without a box shows no place to learn from, so gives none)."""
+    rows, cols = maps.shape[:2]
+    if answer == "YES" and box is None:
+        return [], []
+    X, y = [], []
+    if answer == "YES":
+        cx, cy = (box[0] + box[2]) / 2 / CELL_PX, (box[1] + box[3]) / 2 / CELL_PX
+        for j in range(rows):
+            for i in range(cols):
+                if abs(i + cells / 2 - cx) <= NEAR and abs(j + cells / 2 - cy) <= NEAR:
+                    X.append(maps[j, i])
+                    y.append("YES")
+    for j, i in zip(rng.integers(rows, size=NEGATIVES), rng.integers(cols, size=NEGATIVES), strict=True):
+        if answer == "YES" and _overlaps((i * CELL_PX, j * CELL_PX, (i + cells) * CELL_PX, (j + cells) * CELL_PX), box):
+            continue
+        X.append(maps[j, i])
+        y.append("NO")
+    return X, y
+
+
+def _overlaps(a, b) -> bool:
+    return not (a[2] <= b[0] or a[0] >= b[2] or a[3] <= b[1] or a[1] >= b[3])
+
+
+def fit_window_heads(space, settings: WindowSettings, backbone: Backbone, images: list[Path], scenes: list[dict],
+                     labels: list[dict | None], seed: int) -> tuple[list[Head], dict, dict, list[dict]]:
+    """One window head per feature of ``settings`` from the training renders (``scenes``: their labels less what
+    the frame hid; ``labels``: their render labels, the boxes); (heads, each head's frame calibration, how many
+    windows each learnt from, the calibrated class probabilities per training frame: {} where not asked).
+
+    The calibration: a frame's best window is the most positive of some 200, so its raw probability says YES to
+    frames without the thing far more often than one window would. A one-dimensional logistic fit of the training
+    frames' answers on their best window's log-odds (Platt scaling) turns it into the frame's probability."""
+    rng = np.random.default_rng(seed)
+    examples: dict[str, tuple[list, list]] = {name: ([], []) for name in settings.features}
+    for image, scene, label in zip(images, scenes, labels, strict=True):
+        asked = [n for n in settings.features if n in scene]
+        if not asked:
+            continue
+        rgb = read_rgb(image)
+        maps = settings.maps(backbone, rgb)
+        scale = settings.input_size[1] / rgb.shape[0]
+        scale = (scale, scale)
+        for name in asked:
+            feature = space.features[name]
+            box = part_box(label or {}, feature.visible_parts, scale)
+            X, y = training_windows(maps, feature.truth(scene[name]), box, settings.cells, rng)
+            examples[name][0].extend(X)
+            examples[name][1].extend(y)
+    heads, counts = [], {}
+    for name, (X, y) in examples.items():
+        counts[name] = {answer: y.count(answer) for answer in ("YES", "NO")}
+        if not counts[name]["YES"] or not counts[name]["NO"]:
+            raise InputError(f"--windows {name}: the training renders give {counts[name]['YES']} windows that show "
+                             f"it and {counts[name]['NO']} that do not; both are needed: use a larger --n")
+        heads.append(fit_head(name, np.stack(X), y, seed=seed))
+    calibration, best = _calibrate(space, settings, backbone, heads, images, scenes)
+    read = [{name: _classes(head, _sigmoid(calibration[name], z)) for name, (head, z) in frame.items()}
+            for frame in best]
+    return heads, calibration, counts, read
+
+
+def _calibrate(space, settings: WindowSettings, backbone: Backbone, heads: list[Head], images: list[Path],
+               scenes: list[dict]) -> tuple[dict[str, list[float]], list[dict]]:
+    """Per head, (slope, intercept) of the Platt fit of the training frames' answers on their best window's
+    log-odds; and per frame, {feature: (head, that log-odds)}."""
+    from sklearn.linear_model import LogisticRegression
+
+    best = []
+    for image, scene in zip(images, scenes, strict=True):
+        asked = [h for h in heads if h.feature in scene]
+        flat = _flat(settings.maps(backbone, read_rgb(image))) if asked else None
+        best.append({h.feature: (h, _best_log_odds(h, flat)) for h in asked})
+    out = {}
+    for head in heads:
+        rows = [(frame[head.feature][1], space.features[head.feature].truth(scene[head.feature]) == "YES")
+                for frame, scene in zip(best, scenes, strict=True) if head.feature in frame]
+        z, truth = np.array([[r[0]] for r in rows]), np.array([r[1] for r in rows])
+        if len(set(truth)) < 2:
+            raise InputError(f"--windows {head.feature}: the training renders answer it one way only; use a larger --n")
+        fit = LogisticRegression(C=1e6, max_iter=1000).fit(z, truth)
+        out[head.feature] = [float(fit.coef_[0, 0]), float(fit.intercept_[0])]
+    return out, best
+
+
+def _flat(maps: np.ndarray) -> np.ndarray:
+    return maps.reshape(-1, maps.shape[-1])
+
+
+def _sigmoid(calibration: list[float], log_odds: float) -> float:
+    slope, intercept = calibration
+    return float(1.0 / (1.0 + np.exp(-(slope * log_odds + intercept))))
+
+
+def _classes(head: Head, p_yes: float) -> dict[str, float]:
+    return {c: (p_yes if c == "YES" else 1.0 - p_yes) for c in head.classes}
+
+
+def _best_log_odds(head: Head, flat: np.ndarray) -> float:
+    """The log-odds of YES of the most positive window, from the head's logits in float64 (a probability of a sure
+    window rounds to 1 and has no finite log-odds). A yes/no head stores one row: the log-odds of its second class."""
+    z = (head.standardise(flat.astype(np.float64)) @ head.weight.T + head.bias)[:, 0]
+    return float((z if head.classes.index("YES") == 1 else -z).max())
+
+
+def frame_probabilities(heads: list[Head], calibration: dict[str, list[float]], maps: np.ndarray
+                        ) -> dict[str, dict[str, float]]:
+    """Each window head's class probabilities for a frame: its best window's log-odds through the calibration."""
+    flat = _flat(maps)
+    return {h.feature: _classes(h, _sigmoid(calibration[h.feature], _best_log_odds(h, flat))) for h in heads}
+
+
+HELD_OUT_FILE = "held_out_windows.json"   # the window heads' answers on the model's held-out renders
+
+
+def save_held_out(folder: Path, read: list[dict[str, dict[str, float]]]) -> None:
+    """The window heads' class probabilities per held-out scene (in the stored held-out features' order; {} where a
+    scene does not have the feature), so that ``transfer`` sets the renders beside the photos without rendering."""
+    from ..atomic import write_text
+
+    write_text(folder / HELD_OUT_FILE, json.dumps(read))
+
+
+def load_held_out(folder: Path) -> list[dict[str, dict[str, float]]]:
+    path = folder / HELD_OUT_FILE
+    if not path.is_file():
+        raise InputError(f"the model in {folder} has window heads but not their answers on its held-out renders "
+                         f"({HELD_OUT_FILE}); copy the model folder whole, or train it again")
+    return json.loads(path.read_text())
+
+
+def label_of(image: Path) -> dict | None:
+    """A render's label (its instance boxes), or None where the render has none."""
+    from ..render.outputs import channel_paths
+
+    path = channel_paths(Path(image))["label"]
+    return json.loads(path.read_text()) if path.is_file() else None
