@@ -200,3 +200,19 @@ def test_the_reference_sut_answers_from_windows_and_its_fingerprint_names_them(w
     finally:
         heads["windows"]["calibration"]["phone_position"][1] -= 1.0
         (folder / "model" / "heads.json").write_text(json.dumps(heads))
+
+
+def test_the_reproduce_line_names_the_space_and_rigs_a_model_was_trained_in():
+    from isu_validate.reference.training import model_card_markdown
+    card = {"render_preset": "standard", "held_out": {"per_feature": {}, "by_external_light": {}},
+            "held_out_scenes": 100, "training_scenes": 300, "seed": 1, "backbone": "b", "input_size": [320, 240],
+            "space": "isu-diverse", "space_hash": "h", "training": {},
+            "rigs": {"camera": "passenger-side", "cabin": "default"}}
+    line = next(x for x in model_card_markdown(card).splitlines() if x.startswith("- Reproduce"))
+    assert line.startswith("- Reproduce: `isu-validate reference train --space isu-diverse --camera passenger-side "
+                           "--n 300 ")
+    assert "--cabin" not in line          # the default rig is not spelt out
+    shipped = {**card, "space": "isu-paper"}
+    del shipped["rigs"]                   # a card from before the rigs were recorded
+    line = next(x for x in model_card_markdown(shipped).splitlines() if x.startswith("- Reproduce"))
+    assert line.startswith("- Reproduce: `isu-validate reference train --n 300 ")

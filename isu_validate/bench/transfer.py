@@ -164,7 +164,7 @@ def _train(recipe: Recipe, folder: Path, args) -> tuple[Path, Path, str]:
     try:
         train_reference(space, renderer, model, folder, o["n"], o["held_out"], o["seed"], o["preset"],
                         renderer_version=RENDERER_VERSION, device=args.device, variety=variety.describe(),
-                        fine_tune=tuning, windows=windows)
+                        fine_tune=tuning, windows=windows, rigs={"camera": o["camera"], "cabin": o["cabin"]})
     finally:
         renderer.close()
     return model, folder / "held-out", description

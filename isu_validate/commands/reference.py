@@ -42,8 +42,8 @@ def register(sub) -> None:
                             "backbone stays ImageNet's, frozen")
     train.add_argument("--windows", metavar="FEATURE[,FEATURE...]",
                        help="also fit window heads for these yes/no features (e.g. phone_position): read from the "
-                            "most positive 96-px window of the frame at 640x480, trained where the render labels "
-                            "box the feature's parts; they then answer those features. Off by default")
+                            "most positive 96-px window of the frame scaled to 480 px high, trained where the render "
+                            "labels box the feature's parts; they then answer those features. Off by default")
     train.add_argument("--extra", nargs="+", type=Path, metavar="DATASET",
                        help="retrain on the --base model's own training scenes (its stored features: nothing is "
                             "rendered again) plus these datasets (`isu-validate dataset`); the card compares every "
@@ -106,7 +106,8 @@ def cmd_train_new(args) -> int:
         card = train_reference(space, renderer, out, args.workdir, args.n, args.held_out, args.seed, args.preset,
                                other_presets=checks, renderer_for=renderer_for, renderer_version=RENDERER_VERSION,
                                device=args.device, variety=variety.describe(),
-                               fine_tune=FineTune.optional(args.fine_tune, args.seed), windows=windows)
+                               fine_tune=FineTune.optional(args.fine_tune, args.seed), windows=windows,
+                               rigs={"camera": args.camera, "cabin": args.cabin})
     finally:
         renderer.close()
     output.mark()   # the model is written last, so a refused or failed training leaves no folder behind

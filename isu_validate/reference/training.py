@@ -186,7 +186,7 @@ def train_reference(space: SceneSpace, renderer, out: Path, workdir: Path, n_tra
                     other_presets: Mapping[str, int] | None = None,
                     renderer_for: Callable[[str], object] | None = None, renderer_version: str = "",
                     device: str = "auto", variety: dict | None = None, fine_tune: FineTune | None = None,
-                    windows: WindowSettings | None = None) -> dict:
+                    windows: WindowSettings | None = None, rigs: Mapping[str, str] | None = None) -> dict:
     """Render, embed, fit and write the heads, the model card and the features of both sets (so that
     ``reference train --extra`` never renders them again). ``other_presets`` maps a preset name to how
     many of the held-out scenes to render at it as well (``renderer_for(name)`` opens a renderer for
@@ -194,7 +194,8 @@ def train_reference(space: SceneSpace, renderer, out: Path, workdir: Path, n_tra
     the camera jitter and sensor effects the renderers apply (``render.variety.Variety.describe()``), recorded
     in the card and the stored features; {} or None for the camera file's frames. ``fine_tune``: train the
     backbone's last blocks on the training renders first (``fine_tune.py``; a checkpoint in ``workdir`` resumes it).
-    ``windows``: fit window heads for these yes/no features too (``windows.py``), which then answer them."""
+    ``windows``: fit window heads for these yes/no features too (``windows.py``), which then answer them. ``rigs``:
+    the camera and cabin the renderer was opened with, as the command named them (the card's reproduce line)."""
     start = time.time()
     train_scenes = balanced_scenes(space, n_train, np.random.default_rng(seed))
     test_scenes = balanced_scenes(space, n_test, np.random.default_rng(seed + 10_000))
@@ -217,7 +218,7 @@ def train_reference(space: SceneSpace, renderer, out: Path, workdir: Path, n_tra
                                                   card) if windows else ([], None))
     card.update({"render_preset": preset, "renderer": renderer_version, "device": backbone.device.describe(),
                  "train_seconds": round(time.time() - start, 1), **({"variety": variety} if variety else {}),
-                 **({"fine_tune": tuning} if tuning else {})})
+                 **({"fine_tune": tuning} if tuning else {}), **({"rigs": dict(rigs)} if rigs else {})})
     write_model(out, heads, card, bank, backbone=backbone, window_heads=window_heads, window_held_out=window_held_out)
     return card
 
@@ -343,7 +344,7 @@ def model_card_markdown(card: dict) -> str:
              *_fine_tune_lines(card.get("fine_tune")),
              *_window_lines(card.get("windows")),
              *_hidden_lines(card.get("hidden_from_camera")),
-             f"- Reproduce: `isu-validate reference train --n {card['training_scenes']} "
+             f"- Reproduce: `isu-validate reference train{_where_flags(card)} --n {card['training_scenes']} "
              f"--held-out {card['held_out_scenes']} --seed {card['seed']} --preset {card['render_preset']}{reproduce}"
              + _variety_flags(card.get("variety"))
              + (f" --fine-tune {card['fine_tune']['blocks']}" if card.get("fine_tune") else "")
@@ -399,16 +400,24 @@ def _fine_tune_lines(tuning: dict | None) -> list[str]:
             f"the heads were fitted on the tuned features. Weights: `{WEIGHTS_FILE}`"]
 
 
+def _where_flags(card: dict) -> str:
+    """The space and rigs a model was trained in, where not the defaults (a card from before rigs were recorded
+    names the space only)."""
+    flags = f" --space {card['space']}" if card.get("space", "isu-paper") != "isu-paper" else ""
+    return flags + "".join(f" --{rig} {name}" for rig, name in (card.get("rigs") or {}).items() if name != "default")
+
+
 def _window_lines(windows: dict | None) -> list[str]:
     if not windows:
         return []
-    w, h = windows["input_size"]
+    h = windows["input_size"][1]
     before = "; ".join(f"{name} {fig['accuracy']:.3f}" for name, fig in windows["whole_frame_held_out"].items() if fig)
     counts = "; ".join(f"{name} {c['YES']} showing it, {c['NO']} not"
                        for name, c in windows["training_windows"].items())
     return [f"- Window heads: {', '.join(f'`{n}`' for n in windows['features'])} answered from the most positive "
-            f"{windows['cells']}x{windows['cells']}-cell window of the backbone's map of the frame at {w}x{h} "
-            f"(trained on the render labels' part boxes; windows: {counts}); their rows below are the window heads'. "
+            f"{windows['cells']}x{windows['cells']}-cell window of the backbone's map of the frame scaled to {h} px "
+            f"high, its aspect kept (trained on the render labels' part boxes; windows: {counts}); their rows below "
+            "are the window heads'. "
             f"The whole-frame heads' held-out accuracy: {before or '-'}"]
 
 
