@@ -216,3 +216,20 @@ def test_the_reproduce_line_names_the_space_and_rigs_a_model_was_trained_in():
     del shipped["rigs"]                   # a card from before the rigs were recorded
     line = next(x for x in model_card_markdown(shipped).splitlines() if x.startswith("- Reproduce"))
     assert line.startswith("- Reproduce: `isu-validate reference train --n 300 ")
+
+
+def test_a_features_window_head_does_not_change_with_the_other_features_asked_for(windowed, tmp_path):
+    from isu_validate.reference.windows import fit_window_heads
+    folder, _ = windowed
+    images = sorted((folder / "work" / "train").glob("*.png"))
+    scenes = [json.loads(p.with_suffix(".json").read_text())["scene"] for p in images]
+    labels = [json.loads(channel_paths(p)["label"].read_text()) for p in images]
+    for scene in scenes:      # the painter draws no belt: give every scene a belt box so that both heads fit
+        scene["seat_belt"] = "YES" if scene["phone_position"] == "NONE" else "NO"
+    for label in labels:
+        label["visible"]["seat_belt"] = {"bbox": [0, 0, 40, 40]}
+    backbone = Backbone(160, 120, threads=2)
+    alone = fit_window_heads(SPACE, SMALL, backbone, images, scenes, labels, seed=3)[0][0]
+    both = WindowSettings(("seat_belt", "phone_position"), SMALL.input_size)
+    paired = fit_window_heads(SPACE, both, backbone, images, scenes, labels, seed=3)[0][1]
+    assert paired.feature == "phone_position" and np.allclose(paired.weight, alone.weight, atol=1e-8)

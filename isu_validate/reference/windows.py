@@ -9,14 +9,16 @@ How: the backbone runs once over the frame scaled to ``INPUT``'s height (480 px,
 aspect kept, so a square or wide photo gives a narrower or wider map); its last map (20 x 15 cells of 32 px for a
 4:3 frame) is averaged over every ``CELLS`` x ``CELLS`` window (96 px). Training: a window whose
 centre lies within ``NEAR`` cells of the centre of the feature's part box (``visible_parts`` in the render label)
-is a positive; ``NEGATIVES`` windows drawn per render, clear of the box or from a render whose answer is the
-negative one, are negatives. One logistic head per feature on those window features (``heads.fit_head``); a
-frame's P(YES) is its most positive window's log-odds, calibrated on the training frames (``_calibrate``).
+is a positive; ``NEGATIVES`` windows drawn per render (from the feature's own seeded stream), clear of the box or
+from a render whose answer is the negative one, are negatives. One logistic head per feature on those window
+features (``heads.fit_head``); a frame's P(YES) is its most positive window's log-odds, calibrated on the training
+frames (``_calibrate``).
 Measured in the README ("Where the phone is").
 """
 from __future__ import annotations
 
 import json
+import zlib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -123,7 +125,8 @@ def fit_window_heads(space, settings: WindowSettings, backbone: Backbone, images
     The calibration: a frame's best window is the most positive of some 200, so its raw probability says YES to
     frames without the thing far more often than one window would. A one-dimensional logistic fit of the training
     frames' answers on their best window's log-odds (Platt scaling) turns it into the frame's probability."""
-    rng = np.random.default_rng(seed)
+    # one stream per feature, so that a feature's windows do not change with the other features asked for
+    rngs = {name: np.random.default_rng([seed, zlib.crc32(name.encode())]) for name in settings.features}
     examples: dict[str, tuple[list, list]] = {name: ([], []) for name in settings.features}
     for image, scene, label in zip(images, scenes, labels, strict=True):
         asked = [n for n in settings.features if n in scene]
@@ -136,7 +139,7 @@ def fit_window_heads(space, settings: WindowSettings, backbone: Backbone, images
         for name in asked:
             feature = space.features[name]
             box = part_box(label or {}, feature.visible_parts, scale)
-            X, y = training_windows(maps, feature.truth(scene[name]), box, settings.cells, rng)
+            X, y = training_windows(maps, feature.truth(scene[name]), box, settings.cells, rngs[name])
             examples[name][0].extend(X)
             examples[name][1].extend(y)
     heads, counts = [], {}
