@@ -21,6 +21,7 @@ from ..errors import InputError, InputNotFound
 # EfficientNet-Lite was trained on inputs scaled as (x - 127) / 128 (TF reference implementation).
 INPUT_MEAN, INPUT_STD = 127.0, 128.0
 GRID = 2
+CELL_PX = 32   # one cell of the last convolution's map, in input pixels (EfficientNet-Lite0's stride)
 
 
 FROZEN = "efficientnet-lite0 (ImageNet, frozen), global + 2x2 average pooling"
@@ -86,13 +87,13 @@ class Backbone:
     def windows(self, image: np.ndarray, cells: int, height: int) -> np.ndarray:
         """One RGB uint8 image -> (rows, columns, 1280) float32: the last convolution's map of the image scaled to
         ``height`` pixels high, its aspect kept (a phone squashed is no phone's shape; the map is as wide as the
-        image), averaged over every ``cells`` x ``cells`` window of its 32-pixel cells, stride one cell
+        image), averaged over every ``cells`` x ``cells`` window of its ``CELL_PX`` cells, stride one cell
         (``windows.py``'s heads read them)."""
         import cv2
 
         torch = self.torch
         h, w = image.shape[:2]
-        width = max(int(round(w * height / h)), cells * 32)   # at least one window across an absurdly narrow image
+        width = max(int(round(w * height / h)), cells * CELL_PX)   # at least one window across an absurdly narrow image
         resized = cv2.resize(image, (width, height), interpolation=cv2.INTER_AREA)
         x = self.normalise(torch.from_numpy(resized).permute(2, 0, 1)[None].to(self.device.name).float())
         with torch.inference_mode():

@@ -25,7 +25,7 @@ from .backbone import Backbone, read_rgb
 from .feature_bank import FILES, FeatureSet, save_bank
 from .fine_tune import WEIGHTS_FILE, FineTune, fine_tune_backbone, save_tuned
 from .heads import CLIP_SIGMA, REGULARISATION_C, Head, fit_head, save_heads
-from .windows import WindowSettings, fit_window_heads, frame_probabilities, label_of, save_held_out
+from .windows import WindowSettings, fit_window_heads, frame_probabilities, save_held_out
 from ..errors import InputError
 
 
@@ -114,11 +114,11 @@ def visible_label(canonical: dict, image: Path) -> dict:
     """The scene as a training label, less the features its render hid from the camera (the render label's
     ``occluded``: below the space's ``min_visible``), as the judge leaves them out of a verdict: a phone at the
     far ear, out of the camera's sight, is no example of a phone. A render without a label keeps every feature."""
-    from ..render.outputs import channel_paths
+    from ..render.outputs import read_label
     from ..render.visibility import without_hidden
 
-    label = channel_paths(image)["label"]
-    return without_hidden(canonical, json.loads(label.read_text())) if label.is_file() else canonical
+    label = read_label(image)
+    return without_hidden(canonical, label) if label is not None else canonical
 
 
 def hidden_counts(space: SceneSpace, scenes: list[dict], examples: list[Example]) -> dict[str, int]:
@@ -228,10 +228,12 @@ def _fit_windows(space: SceneSpace, settings: WindowSettings, backbone: Backbone
     """Fit the window heads; the card's figures for their features (training, held-out at every preset) become
     theirs, the whole-frame heads' kept beside them under ``windows``. Returns the heads and their answers on the
     held-out scenes of the training preset (``windows.save_held_out``)."""
+    from ..render.outputs import read_label
+
     started = time.time()
     heads, calibration, counts, training_read = fit_window_heads(
         space, settings, backbone, [e.image for e in train], [e.scene for e in train],
-        [label_of(e.image) for e in train], seed)
+        [read_label(e.image) for e in train], seed)
     whole = card["held_out_by_preset"]
     card["windows"] = {**settings.describe(), "calibration": calibration, "training_windows": counts,
                        "whole_frame_held_out": {n: whole[card["render_preset"]]["per_feature"].get(n)
@@ -243,7 +245,6 @@ def _fit_windows(space: SceneSpace, settings: WindowSettings, backbone: Backbone
         whole[preset]["per_feature"].update(figures["per_feature"])
         for light, by_feature in figures["by_external_light"].items():
             whole[preset]["by_external_light"].setdefault(light, {}).update(by_feature)
-    card["held_out"] = whole[card["render_preset"]]
     card["windows"]["seconds"] = round(time.time() - started, 1)
     return heads, read_at[card["render_preset"]]
 
@@ -298,7 +299,7 @@ def write_model(out: Path, heads: list[Head], card: dict, bank: list[FeatureSet]
     names the file)."""
     meta = {k: card[k] for k in ("backbone", "input_size", "space", "space_hash", "seed")}
     if window_heads:
-        meta["windows"] = {k: card["windows"][k] for k in ("features", "input_size", "cells", "calibration")}
+        meta["windows"] = {k: card["windows"][k] for k in ("features", "height", "cells", "calibration")}
     if backbone is not None and backbone.tuned_blocks:
         out.mkdir(parents=True, exist_ok=True)
         meta["backbone_weights"] = save_tuned(backbone, out)
@@ -410,7 +411,7 @@ def _where_flags(card: dict) -> str:
 def _window_lines(windows: dict | None) -> list[str]:
     if not windows:
         return []
-    h = windows["input_size"][1]
+    h = windows["height"]
     before = "; ".join(f"{name} {fig['accuracy']:.3f}" for name, fig in windows["whole_frame_held_out"].items() if fig)
     counts = "; ".join(f"{name} {c['YES']} showing it, {c['NO']} not"
                        for name, c in windows["training_windows"].items())

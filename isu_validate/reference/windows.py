@@ -5,9 +5,9 @@ faint, and a head fitted on renders learns the pose round it instead, which real
 (State Farm's drinking photos ranked above its phone photos in every whole-frame recipe). The renders know where
 the phone is (the instance boxes of their labels), so a head can learn what a phone looks like where it is.
 
-How: the backbone runs once over the frame scaled to ``INPUT``'s height (480 px, where a phone is some 30-60 px; the
-aspect kept, so a square or wide photo gives a narrower or wider map); its last map (20 x 15 cells of 32 px for a
-4:3 frame) is averaged over every ``CELLS`` x ``CELLS`` window (96 px). Training: a window whose
+How: the backbone runs once over the frame scaled to ``HEIGHT`` (480 px, a render's height, where a phone is some
+30-60 px; the aspect kept, so a square or wide photo gives a narrower or wider map); its last map (20 x 15 cells
+of 32 px for a 4:3 frame) is averaged over every ``CELLS`` x ``CELLS`` window (96 px). Training: a window whose
 centre lies within ``NEAR`` cells of the centre of the feature's part box (``visible_parts`` in the render label)
 is a positive; ``NEGATIVES`` windows drawn per render (from the feature's own seeded stream), clear of the box or
 from a render whose answer is the negative one, are negatives. One logistic head per feature on those window
@@ -25,21 +25,20 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from .backbone import Backbone, read_rgb
+from .backbone import CELL_PX, Backbone, read_rgb
 from .heads import Head, fit_head
 
-INPUT = (640, 480)   # a render's frame as the window backbone reads it: other frames are scaled to its height
+HEIGHT = 480         # every frame is read this many pixels high, its aspect kept (a render's own height)
 CELLS = 3            # a window is CELLS x CELLS cells of the last map
-CELL_PX = 32         # one cell of EfficientNet-Lite0's last map, in input pixels
 NEAR = 1.0           # a positive window's centre is within this many cells of the part box's centre, either way
 NEGATIVES = 8        # negative windows drawn per training render
 
 
 @dataclass(frozen=True)
 class WindowSettings:
-    """Which features get window heads, and the frame size and window they read (the model card records it)."""
+    """Which features get window heads, and the frame height and window they read (the model card records it)."""
     features: tuple[str, ...]
-    input_size: tuple[int, int] = INPUT
+    height: int = HEIGHT
     cells: int = CELLS
 
     @classmethod
@@ -56,14 +55,14 @@ class WindowSettings:
 
     @classmethod
     def from_meta(cls, meta: dict) -> "WindowSettings":
-        return cls(tuple(meta["features"]), tuple(meta["input_size"]), int(meta["cells"]))
+        return cls(tuple(meta["features"]), int(meta["height"]), int(meta["cells"]))
 
     def describe(self) -> dict:
-        return {"features": list(self.features), "input_size": list(self.input_size), "cells": self.cells}
+        return {"features": list(self.features), "height": self.height, "cells": self.cells}
 
     def maps(self, backbone: Backbone, rgb: np.ndarray) -> np.ndarray:
         """The window features of a frame: (rows, columns, 1280)."""
-        return backbone.windows(rgb, self.cells, self.input_size[1])
+        return backbone.windows(rgb, self.cells, self.height)
 
 
 def _check(space, name: str) -> None:
@@ -79,14 +78,13 @@ def _check(space, name: str) -> None:
                          "so no render says where it is")
 
 
-def part_box(label: dict, parts, scale: tuple[float, float]) -> tuple[float, float, float, float] | None:
-    """The box round every pixel of ``parts`` in a render label (frame pixels scaled by ``scale``), or None."""
+def part_box(label: dict, parts, scale: float) -> tuple[float, float, float, float] | None:
+    """The box round every pixel of ``parts`` in a render label (frame pixels times ``scale``), or None."""
     boxes = [label["visible"][p]["bbox"] for p in parts if (label.get("visible") or {}).get(p, {}).get("bbox")]
     if not boxes:
         return None
     b = np.array(boxes, float)
-    return (b[:, 0].min() * scale[0], b[:, 1].min() * scale[1], (b[:, 2].max() + 1) * scale[0],
-            (b[:, 3].max() + 1) * scale[1])
+    return tuple(float(v) * scale for v in (b[:, 0].min(), b[:, 1].min(), b[:, 2].max() + 1, b[:, 3].max() + 1))
 
 
 def training_windows(maps: np.ndarray, answer: str, box, cells: int, rng: np.random.Generator
@@ -134,8 +132,7 @@ def fit_window_heads(space, settings: WindowSettings, backbone: Backbone, images
             continue
         rgb = read_rgb(image)
         maps = settings.maps(backbone, rgb)
-        scale = settings.input_size[1] / rgb.shape[0]
-        scale = (scale, scale)
+        scale = settings.height / rgb.shape[0]   # the aspect is kept: one scale for both axes
         for name in asked:
             feature = space.features[name]
             box = part_box(label or {}, feature.visible_parts, scale)
@@ -149,6 +146,8 @@ def fit_window_heads(space, settings: WindowSettings, backbone: Backbone, images
             raise InputError(f"--windows {name}: the training renders give {counts[name]['YES']} windows that show "
                              f"it and {counts[name]['NO']} that do not; both are needed: use a larger --n")
         heads.append(fit_head(name, np.stack(X), y, seed=seed))
+    # a second pass over the frames: the calibration needs the fitted heads, and keeping every frame's map from the
+    # first pass would hold about 1 MB a frame (600 MB for 600 renders) to save a minute
     calibration, best = _calibrate(space, settings, backbone, heads, images, scenes)
     read = [{name: _classes(head, _sigmoid(calibration[name], z)) for name, (head, z) in frame.items()}
             for frame in best]
@@ -222,11 +221,3 @@ def load_held_out(folder: Path) -> list[dict[str, dict[str, float]]]:
         raise InputError(f"the model in {folder} has window heads but not their answers on its held-out renders "
                          f"({HELD_OUT_FILE}); copy the model folder whole, or train it again")
     return json.loads(path.read_text())
-
-
-def label_of(image: Path) -> dict | None:
-    """A render's label (its instance boxes), or None where the render has none."""
-    from ..render.outputs import channel_paths
-
-    path = channel_paths(Path(image))["label"]
-    return json.loads(path.read_text()) if path.is_file() else None

@@ -46,6 +46,12 @@ def channel_paths(out: Path) -> dict[str, Path]:
     return {name: stem.with_name(stem.name + suffix) for name, suffix in BESIDE.items()}
 
 
+def read_label(frame: Path) -> dict | None:
+    """The render label written beside a frame (its scene, instance boxes, what it hid), or None where it has none."""
+    path = channel_paths(Path(frame))["label"]
+    return json.loads(path.read_text()) if path.is_file() else None
+
+
 def by_product(path: str | Path) -> str | None:
     """What a render output that is not a frame is ("contact sheet", "seg channel"...), or None for a frame."""
     name = Path(path).name

@@ -42,16 +42,13 @@ def dataset_items(dataset: DatasetDir, space: SceneSpace, features: list[str]) -
 def labelled_frames(folder: Path, space: SceneSpace, features: list[str]) -> list[Item]:
     """The frames of a folder of renders that carry their render label (``render --random``, a reference's
     training sets), with the true answers for ``features`` less what the frame hid (the label's ``occluded``)."""
-    import json
-
-    from ..render.outputs import channel_paths
+    from ..render.outputs import read_label
 
     items = []
     for image in render_images(folder):
-        label = channel_paths(image)["label"]
-        if not label.is_file():
+        data = read_label(image)
+        if data is None:
             continue
-        data = json.loads(label.read_text())
         seen = without_hidden(data["scene"], data)
         truth = {q.key: q.truth for q in space.questions(data["scene"]) if q.key in features and q.key in seen}
         if truth:
