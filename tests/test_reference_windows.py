@@ -15,6 +15,7 @@ from isu_validate.reference.feature_bank import load_feature_set
 from isu_validate.reference.heads import fit_head, load_heads, load_window_heads, save_heads
 from isu_validate.reference.model import ReferenceISU
 from isu_validate.reference.retrain import retrain_with_extra
+from isu_validate.reference.stacking import Stacking
 from isu_validate.reference.training import accuracy
 from isu_validate.reference.windows import (
     CELL_PX, NEGATIVES, WindowSettings, frame_probabilities, part_box, training_windows)
@@ -115,14 +116,15 @@ def test_a_frame_reads_as_its_most_positive_window():
     X = np.array([[0.0], [0.1], [0.9], [1.0]] * 5)
     head = fit_head("phone_position", X, ["NO", "NO", "YES", "YES"] * 5)
     maps = np.array([[[0.0], [0.05]], [[0.95], [0.1]]])
-    p = frame_probabilities([head], {"phone_position": [1.0, 0.0]}, maps)["phone_position"]   # no calibration
+    alone = {"phone_position": Stacking(1.0, 0.0, 0.0)}     # no calibration
+    p = frame_probabilities([head], alone, maps)["phone_position"]
     best = head.probabilities(np.array([[0.95]]))[0, head.classes.index("YES")]
     assert p["YES"] == pytest.approx(best) and p["NO"] == pytest.approx(1 - best) and p["YES"] > 0.5
     # a calibration that asks for more than one good window: the same best window reads as less sure
-    stricter = frame_probabilities([head], {"phone_position": [1.0, -2.0]}, maps)["phone_position"]["YES"]
+    stricter = frame_probabilities([head], {"phone_position": Stacking(1.0, 0.0, -2.0)}, maps)["phone_position"]["YES"]
     assert stricter == pytest.approx(1 / (1 + np.exp(-(np.log(best / (1 - best)) - 2.0))), abs=1e-6)
     # a window the head is sure of stays finite through the log-odds
-    sure = frame_probabilities([head], {"phone_position": [1.0, 0.0]}, np.full((1, 1, 1), 1e6))
+    sure = frame_probabilities([head], {"phone_position": Stacking(1.0, 0.0, 0.0)}, np.full((1, 1, 1), 1e6))
     assert 0.5 < sure["phone_position"]["YES"] <= 1.0
 
 

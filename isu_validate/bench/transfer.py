@@ -3,10 +3,12 @@ by side, each judged by what a reference ISU trained only on them does on the re
 
 A recipe is how the training renders are made, or a model already trained from renders:
 - ``NAME=train:camera=RIG,space=SPACE,cabin=RIG,preset=P,n=N,held_out=N,seed=S,camera_jitter=...,
-  sensor_effects=...,fine_tune=BLOCKS,windows=FEATURE,...`` (every key optional; the bench's --n, --held-out,
+  sensor_effects=...,fine_tune=BLOCKS,windows=FEATURE,...,detector=FILE.onnx`` (every key optional; the bench's
+  --n, --held-out,
   --preset and --seed are the defaults; camera_jitter and sensor_effects as ``reference train
   --camera-jitter/--sensor-effects`` take them, commas and all; fine_tune as ``reference train --fine-tune BLOCKS``;
-  windows as ``reference train --windows``): ``reference train`` as it is, in
+  windows and detector as ``reference train --windows --detector``, its default classes): ``reference train`` as
+  it is, in
   DIR/recipes/NAME (renders kept, so an interrupted bench goes on);
 - ``NAME=model:DIR[,renders=FOLDER]``: a model ``reference train`` made elsewhere, e.g. with another
   renderer version's checkout (``reference train --out DIR --workdir W``; its held-out renders, W/held-out,
@@ -28,7 +30,7 @@ from ..errors import InputError
 from ..transfer.arguments import add_real_set_arguments, parse_groups
 
 TRAIN_KEYS = {"camera": str, "cabin": str, "space": str, "preset": str, "n": int, "held_out": int, "seed": int,
-              "camera_jitter": str, "sensor_effects": str, "fine_tune": int, "windows": str}
+              "camera_jitter": str, "sensor_effects": str, "fine_tune": int, "windows": str, "detector": str}
 LISTS = ("camera_jitter", "sensor_effects", "windows")   # values that are lists themselves: pos=0.05,angle=5
 
 
@@ -116,7 +118,7 @@ def recipe_settings(recipe: Recipe, args) -> tuple[dict, str]:
     """(a train recipe's options with the bench's defaults, what its recipe.json holds: those and ``_made_with``)."""
     o = {"camera": "default", "cabin": "default", "space": "isu-paper", "preset": args.preset, "n": args.n,
          "held_out": args.held_out, "seed": args.seed, "camera_jitter": None, "sensor_effects": None,
-         **recipe.options}   # no default for fine_tune or windows: a recipe without them reads as it did before
+         **recipe.options}   # no default for fine_tune, windows or detector: a recipe without them reads as before
     return o, json.dumps({**o, **_made_with(o)}, sort_keys=True)
 
 
@@ -132,9 +134,13 @@ def _made_with(options: dict) -> dict:
     from ..render.cabin import load_cabin
 
     cabin = json.dumps(load_cabin(options["cabin"]), sort_keys=True, default=str)
+    detector = Path(options["detector"]) if options.get("detector") else None
     return {"renderer": RENDERER_VERSION, "camera_hash": load_camera(options["camera"]).hash,
             "cabin_hash": hashlib.sha256(cabin.encode()).hexdigest()[:16],
-            "heads": {"C": REGULARISATION_C, "clip_sigma": CLIP_SIGMA}}
+            "heads": {"C": REGULARISATION_C, "clip_sigma": CLIP_SIGMA},
+            # the detector's content, not its path (a missing file is refused by name before rendering)
+            **({"detector_sha256": hashlib.sha256(detector.read_bytes()).hexdigest() if detector.is_file()
+                else "missing"} if detector else {})}
 
 
 def _train(recipe: Recipe, folder: Path, args) -> tuple[Path, Path, str]:
@@ -158,16 +164,29 @@ def _train(recipe: Recipe, folder: Path, args) -> tuple[Path, Path, str]:
     space = load_space(o["space"])
     variety = Variety.parse(o["camera_jitter"], o["sensor_effects"], o["seed"])
     tuning, windows = FineTune.optional(o.get("fine_tune"), o["seed"]), WindowSettings.parse(o.get("windows"), space)
+    detector = _detector(recipe.name, o.get("detector"), windows)
     renderer = vary(open_renderer(preset=o["preset"], camera=o["camera"], cabin=o["cabin"], space=space,
                                   cache_dir=folder / "cache", log_dir=folder / "logs", device=args.render_device),
                     variety)
     try:
         train_reference(space, renderer, model, folder, o["n"], o["held_out"], o["seed"], o["preset"],
                         renderer_version=RENDERER_VERSION, device=args.device, variety=variety.describe(),
-                        fine_tune=tuning, windows=windows, rigs={"camera": o["camera"], "cabin": o["cabin"]})
+                        fine_tune=tuning, windows=windows, rigs={"camera": o["camera"], "cabin": o["cabin"]},
+                        detector=detector)
     finally:
         renderer.close()
     return model, folder / "held-out", description
+
+
+def _detector(name: str, path: str | None, windows):
+    """A recipe's detector, opened with its default classes (``reference train --detector``), before rendering."""
+    from ..reference.detector import FrameDetector, parse_classes
+
+    if path is None:
+        return None
+    if windows is None:
+        raise InputError(f"--recipe {name}: detector= stacks with window heads; add windows=FEATURE")
+    return FrameDetector.open(Path(path), parse_classes(None, windows.features))
 
 
 def _kept_elsewise(folder: Path, name: str, stored: str, made: str) -> str:

@@ -44,6 +44,13 @@ def register(sub) -> None:
                        help="also fit window heads for these yes/no features (e.g. phone_position): read from the "
                             "most positive 96-px window of the frame scaled to 480 px high, trained where the render "
                             "labels box the feature's parts; they then answer those features. Off by default")
+    train.add_argument("--detector", type=Path, metavar="FILE.onnx",
+                       help="with --windows: stack each window head with this photo-trained object detector's best "
+                            "score for the feature's class (an ONNX export in the Ultralytics YOLO layout; none "
+                            "ships with the product, the card records its licence); copied into the model folder")
+    train.add_argument("--detector-class", action="append", metavar="FEATURE=CLASS",
+                       help="the detector class a window feature reads (default phone_position='cell phone'); "
+                            "repeat for more")
     train.add_argument("--extra", nargs="+", type=Path, metavar="DATASET",
                        help="retrain on the --base model's own training scenes (its stored features: nothing is "
                             "rendered again) plus these datasets (`isu-validate dataset`); the card compares every "
@@ -63,8 +70,10 @@ def register(sub) -> None:
 
 
 DEFAULTS = {"n": 600, "held_out": 200, "seed": 0, "preset": "draft", "camera": "default", "cabin": "default"}
-FROM_SCRATCH = ("n", "held_out", "seed", "preset", "check_preset", "camera", "cabin", "fine_tune", "windows")
-OPTIONAL = ("fine_tune", "windows")   # claimed only when given: a model claimed before they existed resumes as before
+FROM_SCRATCH = ("n", "held_out", "seed", "preset", "check_preset", "camera", "cabin", "fine_tune", "windows",
+                "detector", "detector_class")
+OPTIONAL = ("fine_tune", "windows", "detector", "detector_class")   # claimed only when given: a model claimed
+                                                                    # before they existed resumes as before
 
 
 def cmd_train(args) -> int:
@@ -92,8 +101,11 @@ def cmd_train_new(args) -> int:
     out = args.out or args.workdir / "model"  # never the shipped model unless asked for by name
     checks = dict(parse_check(spec, args.held_out) for spec in args.check_preset)
     windows = WindowSettings.parse(args.windows, space)
-    output = _claim(args, out, {"space": space.hash, **{k: getattr(args, k) for k in FROM_SCRATCH
-                                                        if k not in OPTIONAL or getattr(args, k) is not None},
+    detector = _detector(args, windows)
+    claimed = {k: getattr(args, k) for k in FROM_SCRATCH if k not in OPTIONAL or getattr(args, k) is not None}
+    if detector:   # the file's content, not its name: another file at the same path is another training
+        claimed["detector"] = detector.detector.sha256
+    output = _claim(args, out, {"space": space.hash, **claimed,
                                 **{k: v for k, v in variety.describe().items() if k in VARIETY}})
 
     def renderer_for(preset: str):
@@ -107,7 +119,7 @@ def cmd_train_new(args) -> int:
                                other_presets=checks, renderer_for=renderer_for, renderer_version=RENDERER_VERSION,
                                device=args.device, variety=variety.describe(),
                                fine_tune=FineTune.optional(args.fine_tune, args.seed), windows=windows,
-                               rigs={"camera": args.camera, "cabin": args.cabin})
+                               rigs={"camera": args.camera, "cabin": args.cabin}, detector=detector)
     finally:
         renderer.close()
     output.mark()   # the model is written last, so a refused or failed training leaves no folder behind
@@ -115,6 +127,20 @@ def cmd_train_new(args) -> int:
     _print_written(out, default_model_dir())
     return 0
 
+
+
+def _detector(args, windows):
+    """The detector the window heads stack with (None when not asked for), opened and checked before rendering."""
+    from ..reference.detector import FrameDetector, parse_classes
+
+    if args.detector is None:
+        if args.detector_class:
+            raise InputError("--detector-class names the class a --detector reads; give --detector FILE.onnx too")
+        return None
+    if windows is None:
+        raise InputError("--detector stacks with window heads: give --windows FEATURE too (e.g. --windows "
+                         "phone_position)")
+    return FrameDetector.open(args.detector, parse_classes(args.detector_class, windows.features))
 
 
 def cmd_retrain(args) -> int:

@@ -10,6 +10,8 @@ from ..space import SceneSpace
 from .backbone import Backbone, read_rgb
 from .captioner import describe
 from .heads import load_heads, load_window_heads
+from .detector import FrameDetector
+from .stacking import Stacking
 from .windows import WindowSettings, frame_probabilities
 from ..errors import InputError
 
@@ -31,6 +33,24 @@ def backbone_of(model_dir: Path, meta: dict, device: str = "auto") -> Backbone:
     return backbone
 
 
+def detector_of(model_dir: Path, meta: dict) -> FrameDetector | None:
+    """The detector a model's window heads are stacked with (None for a model without one), checked against the
+    digest its stacking was fitted with."""
+    about = (meta.get("windows") or {}).get("detector")
+    if not about:
+        return None
+    path = Path(model_dir) / about["file"]
+    if not path.is_file():
+        raise InputError(f"the model in {model_dir} stacks its window heads with a detector, and {path} is missing; "
+                         "copy the model folder whole")
+    detector = FrameDetector.open(path, about["classes"])
+    if detector.detector.sha256 != about["sha256"]:
+        raise InputError(f"{path} is not the detector the model in {model_dir} was fitted with (sha256 "
+                         f"{detector.detector.sha256[:12]}, not {about['sha256'][:12]}); copy the model folder "
+                         "whole, or train the model again")
+    return detector
+
+
 class ReferenceISU:
     def __init__(self, space: SceneSpace, model_dir: Path | None = None, backbone: Backbone | None = None,
                  device: str = "auto"):
@@ -46,6 +66,9 @@ class ReferenceISU:
         # window heads (windows.py) answer their features in place of the whole-frame heads
         self.window_heads = load_window_heads(self.model_dir, self.meta)
         self.windows = WindowSettings.from_meta(self.meta["windows"]) if self.window_heads else None
+        self.calibration = {name: Stacking.from_meta(value)
+                            for name, value in self.meta["windows"]["calibration"].items()} if self.windows else {}
+        self.detector = detector_of(self.model_dir, self.meta)   # stacked with the window heads, where trained so
 
     def predict(self, image: Path) -> dict[str, str]:
         """An answer for every feature it has a head for; NONE where its own answers say the
@@ -61,7 +84,8 @@ class ReferenceISU:
                          for name, head in self.heads.items()}
         if self.windows:
             maps = self.windows.maps(self.backbone, rgb)
-            probabilities.update(frame_probabilities(self.window_heads, self.meta["windows"]["calibration"], maps))
+            seen = self.detector.log_odds(rgb, [h.feature for h in self.window_heads]) if self.detector else None
+            probabilities.update(frame_probabilities(self.window_heads, self.calibration, maps, seen))
         raw = {name: max(p, key=p.get) for name, p in probabilities.items()}
         answers = {name: (answer if self._active(name, raw) else "NONE") for name, answer in raw.items()}
         return answers, probabilities

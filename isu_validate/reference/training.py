@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import shutil
 import time
 from collections import defaultdict
 from dataclasses import dataclass
@@ -25,6 +26,7 @@ from .backbone import Backbone, read_rgb
 from .feature_bank import FILES, FeatureSet, save_bank
 from .fine_tune import WEIGHTS_FILE, FineTune, fine_tune_backbone, save_tuned
 from .heads import CLIP_SIGMA, REGULARISATION_C, Head, fit_head, save_heads
+from .detector import DETECTOR_FILE, FrameDetector
 from .windows import WindowSettings, fit_window_heads, frame_probabilities, save_held_out
 from ..errors import InputError
 
@@ -186,7 +188,8 @@ def train_reference(space: SceneSpace, renderer, out: Path, workdir: Path, n_tra
                     other_presets: Mapping[str, int] | None = None,
                     renderer_for: Callable[[str], object] | None = None, renderer_version: str = "",
                     device: str = "auto", variety: dict | None = None, fine_tune: FineTune | None = None,
-                    windows: WindowSettings | None = None, rigs: Mapping[str, str] | None = None) -> dict:
+                    windows: WindowSettings | None = None, rigs: Mapping[str, str] | None = None,
+                    detector: FrameDetector | None = None) -> dict:
     """Render, embed, fit and write the heads, the model card and the features of both sets (so that
     ``reference train --extra`` never renders them again). ``other_presets`` maps a preset name to how
     many of the held-out scenes to render at it as well (``renderer_for(name)`` opens a renderer for
@@ -194,8 +197,9 @@ def train_reference(space: SceneSpace, renderer, out: Path, workdir: Path, n_tra
     the camera jitter and sensor effects the renderers apply (``render.variety.Variety.describe()``), recorded
     in the card and the stored features; {} or None for the camera file's frames. ``fine_tune``: train the
     backbone's last blocks on the training renders first (``fine_tune.py``; a checkpoint in ``workdir`` resumes it).
-    ``windows``: fit window heads for these yes/no features too (``windows.py``), which then answer them. ``rigs``:
-    the camera and cabin the renderer was opened with, as the command named them (the card's reproduce line)."""
+    ``windows``: fit window heads for these yes/no features too (``windows.py``), which then answer them;
+    ``detector``: stack each with a photo-trained detector's score (``detector.py``). ``rigs``: the camera and cabin
+    the renderer was opened with, as the command named them (the card's reproduce line)."""
     start = time.time()
     train_scenes = balanced_scenes(space, n_train, np.random.default_rng(seed))
     test_scenes = balanced_scenes(space, n_test, np.random.default_rng(seed + 10_000))
@@ -215,16 +219,18 @@ def train_reference(space: SceneSpace, renderer, out: Path, workdir: Path, n_tra
     card["hidden_from_camera"] = {"training": hidden_counts(space, train_scenes, train),
                                   "held_out": hidden_counts(space, test_scenes, test)}
     window_heads, window_held_out = (_fit_windows(space, windows, backbone, train, {preset: test, **others}, seed,
-                                                  card) if windows else ([], None))
+                                                  card, detector) if windows else ([], None))
     card.update({"render_preset": preset, "renderer": renderer_version, "device": backbone.device.describe(),
                  "train_seconds": round(time.time() - start, 1), **({"variety": variety} if variety else {}),
                  **({"fine_tune": tuning} if tuning else {}), **({"rigs": dict(rigs)} if rigs else {})})
-    write_model(out, heads, card, bank, backbone=backbone, window_heads=window_heads, window_held_out=window_held_out)
+    write_model(out, heads, card, bank, backbone=backbone, window_heads=window_heads, window_held_out=window_held_out,
+                detector=detector)
     return card
 
 
 def _fit_windows(space: SceneSpace, settings: WindowSettings, backbone: Backbone, train: list[Example],
-                 held_out: dict[str, list[Example]], seed: int, card: dict) -> tuple[list[Head], list[dict]]:
+                 held_out: dict[str, list[Example]], seed: int, card: dict, detector: FrameDetector | None = None
+                 ) -> tuple[list[Head], list[dict]]:
     """Fit the window heads; the card's figures for their features (training, held-out at every preset) become
     theirs, the whole-frame heads' kept beside them under ``windows``. Returns the heads and their answers on the
     held-out scenes of the training preset (``windows.save_held_out``)."""
@@ -233,15 +239,16 @@ def _fit_windows(space: SceneSpace, settings: WindowSettings, backbone: Backbone
     started = time.time()
     heads, calibration, counts, training_read = fit_window_heads(
         space, settings, backbone, [e.image for e in train], [e.scene for e in train],
-        [read_label(e.image) for e in train], seed)
+        [read_label(e.image) for e in train], seed, detector)
     whole = card["held_out_by_preset"]
-    card["windows"] = {**settings.describe(), "calibration": calibration, "training_windows": counts,
+    card["windows"] = {**settings.describe(), "calibration": {n: c.describe() for n, c in calibration.items()},
+                       **({"detector": detector.describe()} if detector else {}), "training_windows": counts,
                        "whole_frame_held_out": {n: whole[card["render_preset"]]["per_feature"].get(n)
                                                 for n in settings.features}}
     card["training"].update(answer_accuracy(space, _answers(training_read), [e.scene for e in train])["per_feature"])
     read_at = {}
     for preset, examples in held_out.items():
-        figures, read_at[preset] = _window_accuracy(space, settings, heads, calibration, backbone, examples)
+        figures, read_at[preset] = _window_accuracy(space, settings, heads, calibration, backbone, examples, detector)
         whole[preset]["per_feature"].update(figures["per_feature"])
         for light, by_feature in figures["by_external_light"].items():
             whole[preset]["by_external_light"].setdefault(light, {}).update(by_feature)
@@ -250,11 +257,15 @@ def _fit_windows(space: SceneSpace, settings: WindowSettings, backbone: Backbone
 
 
 def _window_accuracy(space: SceneSpace, settings: WindowSettings, heads: list[Head], calibration: dict,
-                     backbone: Backbone, examples: list[Example]) -> tuple[dict, list[dict]]:
+                     backbone: Backbone, examples: list[Example], detector: FrameDetector | None = None
+                     ) -> tuple[dict, list[dict]]:
     """(the window heads' accuracy on ``examples``, their class probabilities per example: {} where not asked)."""
-    read = [frame_probabilities([h for h in heads if h.feature in e.scene], calibration,
-                                settings.maps(backbone, read_rgb(e.image)))
-            if any(n in e.scene for n in settings.features) else {} for e in examples]
+    read = []
+    for example in examples:
+        asked = [h for h in heads if h.feature in example.scene]
+        rgb = read_rgb(example.image) if asked else None
+        seen = detector.log_odds(rgb, [h.feature for h in asked]) if detector and asked else None
+        read.append(frame_probabilities(asked, calibration, settings.maps(backbone, rgb), seen) if asked else {})
     return answer_accuracy(space, _answers(read), [e.scene for e in examples]), read
 
 
@@ -294,12 +305,17 @@ def fit_and_describe(space: SceneSpace, train: FeatureSet, held_out: FeatureSet,
 
 def write_model(out: Path, heads: list[Head], card: dict, bank: list[FeatureSet] | None,
                 markdown: Callable[[dict], str] | None = None, backbone: Backbone | None = None,
-                window_heads: list[Head] = (), window_held_out: list[dict] | None = None) -> None:
+                window_heads: list[Head] = (), window_held_out: list[dict] | None = None,
+                detector: FrameDetector | None = None) -> None:
     """Heads (and window heads), card and stored features; a tuned backbone's weights beside them (``heads.json``
     names the file)."""
     meta = {k: card[k] for k in ("backbone", "input_size", "space", "space_hash", "seed")}
     if window_heads:
-        meta["windows"] = {k: card["windows"][k] for k in ("features", "height", "cells", "calibration")}
+        meta["windows"] = {k: card["windows"][k] for k in ("features", "height", "cells", "calibration", "detector")
+                           if k in card["windows"]}
+    if detector is not None:   # the model folder carries its detector, as it carries a tuned backbone
+        out.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(detector.detector.path, out / DETECTOR_FILE)
     if backbone is not None and backbone.tuned_blocks:
         out.mkdir(parents=True, exist_ok=True)
         meta["backbone_weights"] = save_tuned(backbone, out)
@@ -349,7 +365,8 @@ def model_card_markdown(card: dict) -> str:
              f"--held-out {card['held_out_scenes']} --seed {card['seed']} --preset {card['render_preset']}{reproduce}"
              + _variety_flags(card.get("variety"))
              + (f" --fine-tune {card['fine_tune']['blocks']}" if card.get("fine_tune") else "")
-             + (f" --windows {','.join(card['windows']['features'])}" if card.get("windows") else "") + "`",
+             + (f" --windows {','.join(card['windows']['features'])}" if card.get("windows") else "")
+             + _detector_flags((card.get("windows") or {}).get("detector")) + "`",
              f"- Stored features: `{FILES['train']}` and `{FILES['held_out']}` hold the backbone features (float32), "
              "scenes and renderer version of both sets, so `isu-validate reference train --extra DATASET...` "
              "retrains on them plus the dataset without rendering them again, and compares on the same held-out scenes",
@@ -419,7 +436,24 @@ def _window_lines(windows: dict | None) -> list[str]:
             f"{windows['cells']}x{windows['cells']}-cell window of the backbone's map of the frame scaled to {h} px "
             f"high, its aspect kept (trained on the render labels' part boxes; windows: {counts}); their rows below "
             "are the window heads'. "
-            f"The whole-frame heads' held-out accuracy: {before or '-'}"]
+            f"The whole-frame heads' held-out accuracy: {before or '-'}", *_detector_lines(windows.get("detector"))]
+
+
+def _detector_lines(detector: dict | None) -> list[str]:
+    if not detector:
+        return []
+    classes = ", ".join(f"`{f}` <- '{c}'" for f, c in detector["classes"].items())
+    return [f"- Detector: each window head is stacked with an object detector's best score ({classes}; "
+            f"`{detector['file']}`, sha256 {detector['sha256'][:12]}, input {detector['input']} px), the stacking "
+            "fitted on the training renders with the window's log-odds out of fold. The detector was trained by its "
+            f"makers on their own data (for a COCO detector, photographs), not by this project; its licence: "
+            f"{detector['licence']}"]
+
+
+def _detector_flags(detector: dict | None) -> str:
+    if not detector:
+        return ""
+    return " --detector DETECTOR.onnx" + "".join(f" --detector-class {f}='{c}'" for f, c in detector["classes"].items())
 
 
 def _variety_flags(variety: dict | None) -> str:

@@ -12,7 +12,7 @@ centre lies within ``NEAR`` cells of the centre of the feature's part box (``vis
 is a positive; ``NEGATIVES`` windows drawn per render (from the feature's own seeded stream), clear of the box or
 from a render whose answer is the negative one, are negatives. One logistic head per feature on those window
 features (``heads.fit_head``); a frame's P(YES) is its most positive window's log-odds, calibrated on the training
-frames (``_calibrate``).
+frames, or stacked there with a photo-trained detector's score (``stacking.py``, ``detector.py``).
 Measured in the README ("Where the phone is").
 """
 from __future__ import annotations
@@ -21,12 +21,15 @@ import json
 import zlib
 from dataclasses import dataclass
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
 from ..errors import InputError
 from .backbone import CELL_PX, Backbone, read_rgb
+from .detector import FrameDetector
 from .heads import Head, fit_head
+from .stacking import FOLDS, Stacking, fit_stacking, folds
 
 HEIGHT = 480         # every frame is read this many pixels high, its aspect kept (a render's own height)
 CELLS = 3            # a window is CELLS x CELLS cells of the last map
@@ -115,18 +118,20 @@ def _overlaps(a, b) -> bool:
 
 
 def fit_window_heads(space, settings: WindowSettings, backbone: Backbone, images: list[Path], scenes: list[dict],
-                     labels: list[dict | None], seed: int) -> tuple[list[Head], dict, dict, list[dict]]:
+                     labels: list[dict | None], seed: int, detector: FrameDetector | None = None
+                     ) -> tuple[list[Head], dict[str, Stacking], dict, list[dict]]:
     """One window head per feature of ``settings`` from the training renders (``scenes``: their labels less what
-    the frame hid; ``labels``: their render labels, the boxes); (heads, each head's frame calibration, how many
-    windows each learnt from, the calibrated class probabilities per training frame: {} where not asked).
+    the frame hid; ``labels``: their render labels, the boxes), and how a frame's best window makes its probability:
+    calibrated alone, or stacked with ``detector`` (``stacking.py``); (heads, stackings, how many windows each learnt
+    from, the class probabilities per training frame: {} where not asked).
 
     The calibration: a frame's best window is the most positive of some 200, so its raw probability says YES to
-    frames without the thing far more often than one window would. A one-dimensional logistic fit of the training
-    frames' answers on their best window's log-odds (Platt scaling) turns it into the frame's probability."""
+    frames without the thing far more often than one window would. A logistic fit of the training frames' answers
+    on their best window's log-odds (with the detector's beside them) turns it into the frame's probability."""
     # one stream per feature, so that a feature's windows do not change with the other features asked for
     rngs = {name: np.random.default_rng([seed, zlib.crc32(name.encode())]) for name in settings.features}
-    examples: dict[str, tuple[list, list]] = {name: ([], []) for name in settings.features}
-    for image, scene, label in zip(images, scenes, labels, strict=True):
+    examples: dict[str, list[tuple[int, np.ndarray, str]]] = {name: [] for name in settings.features}
+    for frame, (image, scene, label) in enumerate(zip(images, scenes, labels, strict=True)):
         asked = [n for n in settings.features if n in scene]
         if not asked:
             continue
@@ -137,53 +142,67 @@ def fit_window_heads(space, settings: WindowSettings, backbone: Backbone, images
             feature = space.features[name]
             box = part_box(label or {}, feature.visible_parts, scale)
             X, y = training_windows(maps, feature.truth(scene[name]), box, settings.cells, rngs[name])
-            examples[name][0].extend(X)
-            examples[name][1].extend(y)
-    heads, counts = [], {}
-    for name, (X, y) in examples.items():
-        counts[name] = {answer: y.count(answer) for answer in ("YES", "NO")}
-        if not counts[name]["YES"] or not counts[name]["NO"]:
-            raise InputError(f"--windows {name}: the training renders give {counts[name]['YES']} windows that show "
-                             f"it and {counts[name]['NO']} that do not; both are needed: use a larger --n")
-        heads.append(fit_head(name, np.stack(X), y, seed=seed))
+            examples[name].extend((frame, x, answer) for x, answer in zip(X, y, strict=True))
+    counts = {name: {answer: sum(e[2] == answer for e in rows) for answer in ("YES", "NO")}
+              for name, rows in examples.items()}
+    heads = [_fit_windows_of(name, rows, seed) for name, rows in examples.items()]
+    fold_of = folds(len(images), seed)
+    fold_heads = {name: [_fit_windows_of(name, [e for e in rows if fold_of[e[0]] != k], seed) for k in range(FOLDS)]
+                  for name, rows in examples.items()} if detector else {}
     # a second pass over the frames: the calibration needs the fitted heads, and keeping every frame's map from the
     # first pass would hold about 1 MB a frame (600 MB for 600 renders) to save a minute
-    calibration, best = _calibrate(space, settings, backbone, heads, images, scenes)
-    read = [{name: _classes(head, _sigmoid(calibration[name], z)) for name, (head, z) in frame.items()}
-            for frame in best]
-    return heads, calibration, counts, read
-
-
-def _calibrate(space, settings: WindowSettings, backbone: Backbone, heads: list[Head], images: list[Path],
-               scenes: list[dict]) -> tuple[dict[str, list[float]], list[dict]]:
-    """Per head, (slope, intercept) of the Platt fit of the training frames' answers on their best window's
-    log-odds; and per frame, {feature: (head, that log-odds)}."""
-    from sklearn.linear_model import LogisticRegression
-
-    best = []
-    for image, scene in zip(images, scenes, strict=True):
-        asked = [h for h in heads if h.feature in scene]
-        flat = _flat(settings.maps(backbone, read_rgb(image))) if asked else None
-        best.append({h.feature: (h, _best_log_odds(h, flat)) for h in asked})
-    out = {}
+    read_frames = [_read_training_frame(settings, backbone, heads, fold_heads, fold_of[i], image, scene, detector)
+                   for i, (image, scene) in enumerate(zip(images, scenes, strict=True))]
+    stackings, read = {}, [{} for _ in images]
     for head in heads:
-        rows = [(frame[head.feature][1], space.features[head.feature].truth(scene[head.feature]) == "YES")
-                for frame, scene in zip(best, scenes, strict=True) if head.feature in frame]
-        z, truth = np.array([[r[0]] for r in rows]), np.array([r[1] for r in rows])
-        if len(set(truth)) < 2:
-            raise InputError(f"--windows {head.feature}: the training renders answer it one way only; use a larger --n")
-        fit = LogisticRegression(C=1e6, max_iter=1000).fit(z, truth)
-        out[head.feature] = [float(fit.coef_[0, 0]), float(fit.intercept_[0])]
-    return out, best
+        name, feature = head.feature, space.features[head.feature]
+        rows = [i for i, frame in enumerate(read_frames) if name in frame]
+        truth = np.array([feature.truth(scenes[i][name]) == "YES" for i in rows])
+        # stacked with a detector, the window's log-odds are out of fold (stacking.py); alone, as fitted
+        window = np.array([read_frames[i][name].out_of_fold if detector else read_frames[i][name].window
+                           for i in rows])
+        seen = np.array([read_frames[i][name].detector for i in rows]) if detector else None
+        stackings[name] = fit_stacking(name, window, seen, truth)
+        for i in rows:
+            frame = read_frames[i][name]
+            read[i][name] = _classes(head, stackings[name].probability(frame.window, frame.detector))
+    return heads, stackings, counts, read
+
+
+def _fit_windows_of(name: str, rows: list[tuple[int, np.ndarray, str]], seed: int) -> Head:
+    answers = [e[2] for e in rows]
+    yes, no = answers.count("YES"), answers.count("NO")
+    if not yes or not no:
+        raise InputError(f"--windows {name}: the training renders (or, with --detector, a fifth of them left out to "
+                         f"stack it) give {yes} windows that show it and {no} that do not; both are needed: "
+                         "use a larger --n")
+    return fit_head(name, np.stack([e[1] for e in rows]), answers, seed=seed)
+
+
+class TrainingRead(NamedTuple):
+    """One training frame's log-odds of one feature."""
+    window: float                 # the best window's, by the head fitted on every frame
+    out_of_fold: float | None     # the best window's, by the head fitted without the frame's fold (with a detector)
+    detector: float               # the detector's (0 without one)
+
+
+def _read_training_frame(settings: WindowSettings, backbone: Backbone, heads: list[Head],
+                         fold_heads: dict[str, list[Head]], fold: int, image: Path, scene: dict,
+                         detector: FrameDetector | None) -> dict[str, TrainingRead]:
+    """{feature: its log-odds} for one training frame."""
+    asked = [h for h in heads if h.feature in scene]
+    if not asked:
+        return {}
+    rgb = read_rgb(image)
+    flat = _flat(settings.maps(backbone, rgb))
+    seen = detector.log_odds(rgb, [h.feature for h in asked]) if detector else {}
+    return {h.feature: TrainingRead(_best_log_odds(h, flat),
+                                    _best_log_odds(fold_heads[h.feature][fold], flat) if fold_heads else None,
+                                    seen.get(h.feature, 0.0)) for h in asked}
 
 
 def _flat(maps: np.ndarray) -> np.ndarray:
     return maps.reshape(-1, maps.shape[-1])
-
-
-def _sigmoid(calibration: list[float], log_odds: float) -> float:
-    slope, intercept = calibration
-    return float(1.0 / (1.0 + np.exp(-(slope * log_odds + intercept))))
 
 
 def _classes(head: Head, p_yes: float) -> dict[str, float]:
@@ -197,11 +216,14 @@ def _best_log_odds(head: Head, flat: np.ndarray) -> float:
     return float((z if head.classes.index("YES") == 1 else -z).max())
 
 
-def frame_probabilities(heads: list[Head], calibration: dict[str, list[float]], maps: np.ndarray
-                        ) -> dict[str, dict[str, float]]:
-    """Each window head's class probabilities for a frame: its best window's log-odds through the calibration."""
+def frame_probabilities(heads: list[Head], stackings: dict[str, Stacking], maps: np.ndarray,
+                        detector: dict[str, float] | None = None) -> dict[str, dict[str, float]]:
+    """Each window head's class probabilities for a frame: its best window's log-odds through its calibration, or
+    stacked with the detector's log-odds (``detector``: {feature: log-odds}, for a model that has one)."""
     flat = _flat(maps)
-    return {h.feature: _classes(h, _sigmoid(calibration[h.feature], _best_log_odds(h, flat))) for h in heads}
+    return {h.feature: _classes(h, stackings[h.feature].probability(_best_log_odds(h, flat),
+                                                                    (detector or {}).get(h.feature, 0.0)))
+            for h in heads}
 
 
 HELD_OUT_FILE = "held_out_windows.json"   # the window heads' answers on the model's held-out renders

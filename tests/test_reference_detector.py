@@ -1,0 +1,203 @@
+"""``reference train --windows ... --detector FILE.onnx``: window heads stacked with a photo-trained detector's score.
+
+The detector here is a real ONNX graph run by onnxruntime, built in the test (a stand-in for a COCO detector, never
+shipped): it scores "cell phone" where a cell of the letterboxed frame is much bluer than red, as the painted
+phone's lit screen is, and nowhere else."""
+import json
+import shutil
+
+import numpy as np
+import pytest
+
+from isu_validate.errors import InputError
+from isu_validate.reference.backbone import read_rgb
+from isu_validate.reference.detector import DETECTOR_FILE, Detector, FrameDetector, logit, parse_classes
+from isu_validate.reference.model import ReferenceISU
+from isu_validate.reference.stacking import FOLDS, Stacking, folds
+from isu_validate.space import load_space
+from tests.test_reference import train_painted
+from tests.test_reference_windows import SMALL, PhonePainter
+
+SPACE = load_space()
+SIDE = 64          # the stand-in's input square
+CELL = 8           # it pools the frame in 8x8-pixel cells: 64 anchors
+
+
+def onnx_detector(path, names=("person", "cell phone"), rows=None, metadata=True):
+    """A YOLO-layout ONNX detector: output [1, 4 + classes, 64]; 'cell phone' = sigmoid(20 (blue - red) - 4) of
+    each cell, every other row 0. ``rows`` overrides the output's row count (a wrong layout)."""
+    import onnx
+    from onnx import TensorProto, helper
+
+    k = len(names)
+    nodes = [
+        helper.make_node("AveragePool", ["images"], ["pooled"], kernel_shape=[CELL, CELL], strides=[CELL, CELL]),
+        helper.make_node("Split", ["pooled", "split"], ["r", "g", "b"], axis=1),
+        helper.make_node("Sub", ["b", "r"], ["blue"]),
+        helper.make_node("Mul", ["blue", "gain"], ["scaled"]),
+        helper.make_node("Add", ["scaled", "offset"], ["z"]),
+        helper.make_node("Sigmoid", ["z"], ["p"]),
+        helper.make_node("Reshape", ["p", "row_shape"], ["phone"]),
+        helper.make_node("Mul", ["phone", "zero"], ["nothing"]),
+        helper.make_node("Concat", ["nothing"] * (4 + k - 1) + ["phone"] if rows is None else
+                         ["nothing"] * (rows - 1) + ["phone"], ["output0"], axis=1),
+    ]
+    anchors = (SIDE // CELL) ** 2
+    init = [helper.make_tensor("split", TensorProto.INT64, [3], [1, 1, 1]),
+            helper.make_tensor("gain", TensorProto.FLOAT, [], [20.0]),
+            helper.make_tensor("offset", TensorProto.FLOAT, [], [-4.0]),
+            helper.make_tensor("zero", TensorProto.FLOAT, [], [0.0]),
+            helper.make_tensor("row_shape", TensorProto.INT64, [3], [1, 1, anchors])]
+    graph = helper.make_graph(nodes, "stand-in detector",
+                              [helper.make_tensor_value_info("images", TensorProto.FLOAT, [1, 3, SIDE, SIDE])],
+                              [helper.make_tensor_value_info("output0", TensorProto.FLOAT,
+                                                             [1, (4 + k) if rows is None else rows, anchors])],
+                              init)
+    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 18)])
+    model.ir_version = 9
+    if metadata:
+        for key, value in {"names": repr(dict(enumerate(names))), "imgsz": f"[{SIDE}, {SIDE}]",
+                           "license": "test stand-in, no licence"}.items():
+            model.metadata_props.add(key=key, value=value)
+    onnx.save(model, str(path))
+    return path
+
+
+@pytest.fixture(scope="module")
+def detector_file(tmp_path_factory):
+    return onnx_detector(tmp_path_factory.mktemp("detector") / "standin.onnx")
+
+
+@pytest.fixture(scope="module")
+def stacked(tmp_path_factory, detector_file):
+    detector = FrameDetector.open(detector_file, {"phone_position": "cell phone"})
+    return train_painted(tmp_path_factory, "stacked", PhonePainter(), 30, 16, windows=SMALL, detector=detector)
+
+
+def test_the_detector_reads_its_names_size_and_licence_and_scores_the_phone_where_it_is(detector_file, stacked):
+    detector = Detector(detector_file)
+    assert detector.names == ["person", "cell phone"] and detector.size == SIDE
+    assert detector.licence == "test stand-in, no licence" and len(detector.sha256) == 64
+    folder, _ = stacked
+    images = sorted((folder / "work" / "held-out").glob("*.png"))
+    scenes = [json.loads(p.with_suffix(".json").read_text())["scene"] for p in images]
+    scores = [detector.best_scores(read_rgb(p), ["cell phone"])["cell phone"] for p in images]
+    phone = [s for s, scene in zip(scores, scenes) if scene["phone_position"] != "NONE"]
+    none = [s for s, scene in zip(scores, scenes) if scene["phone_position"] == "NONE"]
+    assert phone and none and min(phone) > max(none)     # the stand-in sees the lit screen, not the grey decoy
+    # a frame of any shape is letterboxed on grey into the square, its aspect kept
+    boxed = detector.letterbox(np.zeros((30, 120, 3), np.uint8))
+    assert boxed.shape == (1, 3, SIDE, SIDE) and boxed[0, 0, 0, 0] == pytest.approx(114 / 255)
+    assert boxed[0, 0, SIDE // 2, 0] == 0.0
+
+
+def test_window_heads_stacked_with_the_detector_answer_as_the_card_says(stacked, detector_file):
+    folder, card = stacked
+    model = folder / "model"
+    meta = json.loads((model / "heads.json").read_text())
+    stacking = meta["windows"]["calibration"]["phone_position"]
+    assert set(stacking) == {"window", "detector", "intercept"} and stacking["detector"] > 0
+    about = meta["windows"]["detector"]
+    assert about == card["windows"]["detector"] and about["classes"] == {"phone_position": "cell phone"}
+    assert (model / DETECTOR_FILE).read_bytes() == detector_file.read_bytes()   # the model folder carries it
+    assert card["held_out"]["per_feature"]["phone_position"]["accuracy"] >= 0.9
+    text = (model / "MODEL_CARD.md").read_text()
+    assert "- Detector: each window head is stacked with an object detector" in text
+    assert "its licence: test stand-in, no licence" in text
+    assert "--detector DETECTOR.onnx --detector-class phone_position='cell phone'" in text
+    # the SUT reads the frame through both and agrees with the card's held-out figure
+    reader = ReferenceISU(SPACE, model)
+    images = sorted((folder / "work" / "held-out").glob("*.png"))
+    truth = [json.loads(p.with_suffix(".json").read_text())["scene"]["phone_position"] != "NONE" for p in images]
+    said = [reader.read(p)[1]["phone_position"]["YES"] for p in images]
+    assert np.mean([(p >= 0.5) == t for p, t in zip(said, truth)]) == pytest.approx(
+        card["held_out"]["per_feature"]["phone_position"]["accuracy"])
+    # and each answer is the stacking of the best window's log-odds and the detector's
+    rgb = read_rgb(images[0])
+    window = reader.calibration["phone_position"]
+    seen = reader.detector.log_odds(rgb, ["phone_position"])["phone_position"]
+    assert seen == pytest.approx(logit(Detector(detector_file).best_scores(rgb, ["cell phone"])["cell phone"]))
+    assert isinstance(window, Stacking) and window.detector == pytest.approx(stacking["detector"])
+
+
+def test_a_model_whose_detector_is_missing_or_another_is_refused(stacked, tmp_path, detector_file):
+    folder, _ = stacked
+    copy = tmp_path / "model"
+    shutil.copytree(folder / "model", copy)
+    (copy / DETECTOR_FILE).unlink()
+    with pytest.raises(InputError, match="copy the model folder whole"):
+        ReferenceISU(SPACE, copy)
+    onnx_detector(copy / DETECTOR_FILE, names=("person", "cell phone", "cup"))   # another detector, same name
+    with pytest.raises(InputError, match="is not the detector the model .* was fitted with"):
+        ReferenceISU(SPACE, copy)
+
+
+def test_bad_detector_files_are_refused_with_what_is_wrong(tmp_path):
+    with pytest.raises(InputError, match="no such file"):
+        Detector(tmp_path / "absent.onnx")
+    (tmp_path / "garbage.onnx").write_bytes(b"not a graph")
+    with pytest.raises(InputError, match="not a readable ONNX model"):
+        Detector(tmp_path / "garbage.onnx")
+    with pytest.raises(InputError, match="no class names"):
+        Detector(onnx_detector(tmp_path / "bare.onnx", metadata=False))
+    with pytest.raises(InputError, match=r"not \[1, 4 \+ 2 classes, anchors\]"):
+        Detector(onnx_detector(tmp_path / "rows.onnx", rows=5))
+    with pytest.raises(InputError, match="it has no class 'mobile'; its classes: person, cell phone"):
+        FrameDetector.open(onnx_detector(tmp_path / "ok.onnx"), {"phone_position": "mobile"})
+
+
+def test_detector_classes_default_for_the_phone_and_are_named_for_the_rest():
+    assert parse_classes(None, ("phone_position",)) == {"phone_position": "cell phone"}
+    assert parse_classes(["seat_belt=tie", "phone_position = mobile phone"], ("phone_position", "seat_belt")) == {
+        "phone_position": "mobile phone", "seat_belt": "tie"}
+    with pytest.raises(InputError, match="no detector class for seat_belt"):
+        parse_classes(None, ("phone_position", "seat_belt"))
+    with pytest.raises(InputError, match="write FEATURE=CLASS"):
+        parse_classes(["seat_belt"], ("seat_belt",))
+    with pytest.raises(InputError, match="'driver_gender' has no window head"):
+        parse_classes(["driver_gender=person"], ("phone_position",))
+
+
+def test_logits_of_sure_scores_stay_finite_and_folds_are_balanced_and_seeded():
+    assert np.isfinite(logit(0.0)) and np.isfinite(logit(1.0)) and logit(0.5) == 0.0
+    a = folds(23, seed=4)
+    assert np.array_equal(a, folds(23, seed=4)) and not np.array_equal(a, folds(23, seed=5))
+    assert sorted(np.bincount(a, minlength=FOLDS)) == [4, 4, 5, 5, 5]
+
+
+def test_a_stored_calibration_reads_as_a_stacking_either_way():
+    assert Stacking.from_meta([1.04, -3.05]) == Stacking(1.04, 0.0, -3.05)     # a window head alone
+    stacked = Stacking(0.5, 0.4, -1.0)
+    assert Stacking.from_meta(json.loads(json.dumps(stacked.describe()))) == stacked
+    assert Stacking(1.04, 0.0, -3.05).describe() == [1.04, -3.05]              # stored as before: same fingerprint
+    assert stacked.probability(2.0, 1.0) == pytest.approx(1 / (1 + np.exp(-(1.0 + 0.4 - 1.0))))
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--detector", "x.onnx"], "--detector stacks with window heads: give --windows"),
+    (["--detector-class", "phone_position=cell phone"], "--detector-class names the class a --detector reads"),
+    (["--windows", "phone_position", "--detector", "absent.onnx"], "no such file"),
+])
+def test_the_command_refuses_a_detector_it_cannot_use_before_rendering(argv, message, tmp_path, capsys):
+    from isu_validate.cli import main
+    code = main(["reference", "train", "--n", "10", "--held-out", "2", "--workdir", str(tmp_path / "w"), *argv])
+    assert code == 2 and message in capsys.readouterr().err
+    assert not (tmp_path / "w" / "model").exists()     # nothing rendered, no folder claimed
+
+
+def test_a_bench_recipe_names_its_detector_by_content_and_refuses_one_it_cannot_use(tmp_path, detector_file):
+    from argparse import Namespace
+
+    from isu_validate.bench.transfer import _train, parse_recipe, recipe_settings
+    args = Namespace(preset="draft", n=4, held_out=2, seed=0, render_device="cpu", device="cpu")
+    recipe = parse_recipe(f"side=train:n=4,windows=phone_position,detector={detector_file}")
+    assert recipe.options["detector"] == str(detector_file)
+    made = json.loads(recipe_settings(recipe, args)[1])
+    assert made["detector_sha256"] == Detector(detector_file).sha256
+    assert "detector_sha256" not in json.loads(recipe_settings(parse_recipe("side=train:n=4"), args)[1])
+    with pytest.raises(InputError, match="detector= stacks with window heads; add windows=FEATURE"):
+        _train(parse_recipe(f"side=train:n=4,detector={detector_file}"), tmp_path / "a", args)
+    with pytest.raises(InputError, match="no such file"):
+        _train(parse_recipe(f"side=train:n=4,windows=phone_position,detector={tmp_path / 'x.onnx'}"),
+               tmp_path / "b", args)
+    assert not (tmp_path / "a" / "cache").exists() and not (tmp_path / "b" / "cache").exists()   # nothing rendered
