@@ -142,6 +142,18 @@ def test_bad_detector_files_are_refused_with_what_is_wrong(tmp_path):
         Detector(onnx_detector(tmp_path / "bare.onnx", metadata=False))
     with pytest.raises(InputError, match=r"not \[1, 4 \+ 2 classes, anchors\]"):
         Detector(onnx_detector(tmp_path / "rows.onnx", rows=5))
+    # a graph whose rows show only when it runs (a dynamic export): its real session, answering 5 rows
+    named = Detector(onnx_detector(tmp_path / "named.onnx"))
+    real = named.session
+
+    class FiveRows:
+        get_inputs = real.get_inputs
+
+        def run(self, outputs, feeds):
+            return [np.zeros((1, 5, real.run(outputs, feeds)[0].shape[2]), np.float32)]
+    named.session = FiveRows()
+    with pytest.raises(InputError, match="it gave 5 rows per anchor, not 4 \\+ 2 classes"):
+        named.best_scores(np.zeros((48, 64, 3), np.uint8), ["cell phone"])
     with pytest.raises(InputError, match="it has no class 'mobile'; its classes: person, cell phone"):
         FrameDetector.open(onnx_detector(tmp_path / "ok.onnx"), {"phone_position": "mobile"})
 

@@ -69,6 +69,9 @@ class Detector:
     def best_scores(self, rgb: np.ndarray, classes: list[str]) -> dict[str, float]:
         """The best anchor's score for each of ``classes`` in an RGB uint8 frame."""
         out = self.session.run(None, {self.session.get_inputs()[0].name: self.letterbox(rgb)})[0][0]
+        if out.shape[0] != 4 + len(self.names):   # a graph that declares its rows only as a name is checked here
+            raise InputError(f"--detector {self.path}: it gave {out.shape[0]} rows per anchor, not 4 + "
+                             f"{len(self.names)} classes (the Ultralytics YOLO layout, exported without NMS)")
         return {name: float(out[4 + self.class_index(name)].max()) for name in classes}
 
     def letterbox(self, rgb: np.ndarray) -> np.ndarray:

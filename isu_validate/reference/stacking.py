@@ -34,7 +34,7 @@ class Stacking:
         slope, intercept = value
         return cls(float(slope), 0.0, float(intercept))
 
-    def describe(self) -> dict:
+    def describe(self) -> dict | list:
         """As stored: a window head alone keeps its [slope, intercept] (models before stacking read the same)."""
         if self.detector == 0.0:
             return [self.window, self.intercept]
