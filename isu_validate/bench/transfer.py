@@ -144,6 +144,7 @@ def _made_with(options: dict) -> dict:
 
 
 def _train(recipe: Recipe, folder: Path, args) -> tuple[Path, Path, str]:
+    from ..reference.detector import open_for_windows
     from ..reference.fine_tune import FineTune
     from ..reference.training import train_reference
     from ..reference.windows import WindowSettings
@@ -164,7 +165,8 @@ def _train(recipe: Recipe, folder: Path, args) -> tuple[Path, Path, str]:
     space = load_space(o["space"])
     variety = Variety.parse(o["camera_jitter"], o["sensor_effects"], o["seed"])
     tuning, windows = FineTune.optional(o.get("fine_tune"), o["seed"]), WindowSettings.parse(o.get("windows"), space)
-    detector = _detector(recipe.name, o.get("detector"), windows)
+    detector = open_for_windows(o.get("detector"), windows, None,   # its default classes
+                                f"--recipe {recipe.name}: detector= stacks with window heads; add windows=FEATURE")
     renderer = vary(open_renderer(preset=o["preset"], camera=o["camera"], cabin=o["cabin"], space=space,
                                   cache_dir=folder / "cache", log_dir=folder / "logs", device=args.render_device),
                     variety)
@@ -176,17 +178,6 @@ def _train(recipe: Recipe, folder: Path, args) -> tuple[Path, Path, str]:
     finally:
         renderer.close()
     return model, folder / "held-out", description
-
-
-def _detector(name: str, path: str | None, windows):
-    """A recipe's detector, opened with its default classes (``reference train --detector``), before rendering."""
-    from ..reference.detector import FrameDetector, parse_classes
-
-    if path is None:
-        return None
-    if windows is None:
-        raise InputError(f"--recipe {name}: detector= stacks with window heads; add windows=FEATURE")
-    return FrameDetector.open(Path(path), parse_classes(None, windows.features))
 
 
 def _kept_elsewise(folder: Path, name: str, stored: str, made: str) -> str:

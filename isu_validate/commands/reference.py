@@ -131,16 +131,12 @@ def cmd_train_new(args) -> int:
 
 def _detector(args, windows):
     """The detector the window heads stack with (None when not asked for), opened and checked before rendering."""
-    from ..reference.detector import FrameDetector, parse_classes
+    from ..reference.detector import open_for_windows
 
-    if args.detector is None:
-        if args.detector_class:
-            raise InputError("--detector-class names the class a --detector reads; give --detector FILE.onnx too")
-        return None
-    if windows is None:
-        raise InputError("--detector stacks with window heads: give --windows FEATURE too (e.g. --windows "
-                         "phone_position)")
-    return FrameDetector.open(args.detector, parse_classes(args.detector_class, windows.features))
+    if args.detector is None and args.detector_class:
+        raise InputError("--detector-class names the class a --detector reads; give --detector FILE.onnx too")
+    return open_for_windows(args.detector, windows, args.detector_class, "--detector stacks with window heads: "
+                            "give --windows FEATURE too (e.g. --windows phone_position)")
 
 
 def cmd_retrain(args) -> int:

@@ -113,6 +113,17 @@ class FrameDetector:
         return self.detector.describe(self.classes)
 
 
+def open_for_windows(path: Path | str | None, windows, pairs: list[str] | None, missing_windows: str
+                     ) -> FrameDetector | None:
+    """The detector a training's window heads stack with (None when none is named), opened and checked before
+    anything renders; ``missing_windows``: the error when a detector is named without window heads."""
+    if path is None:
+        return None
+    if windows is None:
+        raise InputError(missing_windows)
+    return FrameDetector.open(Path(path), parse_classes(pairs, windows.features))
+
+
 def _names(text: str | None, path: Path) -> list[str]:
     try:
         names = ast.literal_eval(text) if text else None
