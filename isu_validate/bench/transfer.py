@@ -3,13 +3,12 @@ by side, each judged by what a reference ISU trained only on them does on the re
 
 A recipe is how the training renders are made, or a model already trained from renders:
 - ``NAME=train:camera=RIG,space=SPACE,cabin=RIG,preset=P,n=N,held_out=N,seed=S,camera_jitter=...,
-  sensor_effects=...,fine_tune=BLOCKS,windows=FEATURE,...,detector=FILE.onnx`` (every key optional; the bench's
-  --n, --held-out,
-  --preset and --seed are the defaults; camera_jitter and sensor_effects as ``reference train
-  --camera-jitter/--sensor-effects`` take them, commas and all; fine_tune as ``reference train --fine-tune BLOCKS``;
-  windows and detector as ``reference train --windows --detector``, its default classes): ``reference train`` as
-  it is, in
-  DIR/recipes/NAME (renders kept, so an interrupted bench goes on);
+  sensor_effects=...,fine_tune=BLOCKS,windows=FEATURE,...,detector=yolov4-tiny|FILE,detector_tiles=1|2`` (every
+  key optional; the bench's --n, --held-out, --preset and --seed are the defaults; camera_jitter and
+  sensor_effects as ``reference train --camera-jitter/--sensor-effects`` take them, commas and all; fine_tune as
+  ``reference train --fine-tune BLOCKS``; windows, detector and detector_tiles as ``reference train --windows
+  --detector --detector-tiles``, its default classes): ``reference train`` as it is, in DIR/recipes/NAME (renders
+  kept, so an interrupted bench goes on);
 - ``NAME=model:DIR[,renders=FOLDER]``: a model ``reference train`` made elsewhere, e.g. with another
   renderer version's checkout (``reference train --out DIR --workdir W``; its held-out renders, W/held-out,
   are the render side of KID).
@@ -30,7 +29,8 @@ from ..errors import InputError
 from ..transfer.arguments import add_real_set_arguments, parse_groups
 
 TRAIN_KEYS = {"camera": str, "cabin": str, "space": str, "preset": str, "n": int, "held_out": int, "seed": int,
-              "camera_jitter": str, "sensor_effects": str, "fine_tune": int, "windows": str, "detector": str}
+              "camera_jitter": str, "sensor_effects": str, "fine_tune": int, "windows": str, "detector": str,
+              "detector_tiles": int}
 LISTS = ("camera_jitter", "sensor_effects", "windows")   # values that are lists themselves: pos=0.05,angle=5
 
 
@@ -134,13 +134,22 @@ def _made_with(options: dict) -> dict:
     from ..render.cabin import load_cabin
 
     cabin = json.dumps(load_cabin(options["cabin"]), sort_keys=True, default=str)
-    detector = Path(options["detector"]) if options.get("detector") else None
     return {"renderer": RENDERER_VERSION, "camera_hash": load_camera(options["camera"]).hash,
             "cabin_hash": hashlib.sha256(cabin.encode()).hexdigest()[:16],
             "heads": {"C": REGULARISATION_C, "clip_sigma": CLIP_SIGMA},
-            # the detector's content, not its path (a missing file is refused by name before rendering)
-            **({"detector_sha256": hashlib.sha256(detector.read_bytes()).hexdigest() if detector.is_file()
-                else "missing"} if detector else {})}
+            **(_detector_made_with(options) if options.get("detector") else {})}
+
+
+def _detector_made_with(options: dict) -> dict:
+    """The detector by its content, not its name (a missing file is refused by name before rendering), and the views
+    it reads (a recipe that leaves them out reads the default, so a kept model read otherwise is another recipe)."""
+    from ..reference.detector import open_detector
+
+    try:
+        digest = open_detector(options["detector"]).sha256
+    except InputError:
+        digest = "missing"
+    return {"detector_sha256": digest, "detector_tiles": options.get("detector_tiles") or 2}
 
 
 def _train(recipe: Recipe, folder: Path, args) -> tuple[Path, Path, str]:
@@ -166,7 +175,8 @@ def _train(recipe: Recipe, folder: Path, args) -> tuple[Path, Path, str]:
     variety = Variety.parse(o["camera_jitter"], o["sensor_effects"], o["seed"])
     tuning, windows = FineTune.optional(o.get("fine_tune"), o["seed"]), WindowSettings.parse(o.get("windows"), space)
     detector = open_for_windows(o.get("detector"), windows, None,   # its default classes
-                                f"--recipe {recipe.name}: detector= stacks with window heads; add windows=FEATURE")
+                                f"--recipe {recipe.name}: detector= stacks with window heads; add windows=FEATURE",
+                                o.get("detector_tiles") or 2)
     renderer = vary(open_renderer(preset=o["preset"], camera=o["camera"], cabin=o["cabin"], space=space,
                                   cache_dir=folder / "cache", log_dir=folder / "logs", device=args.render_device),
                     variety)

@@ -44,10 +44,15 @@ def register(sub) -> None:
                        help="also fit window heads for these yes/no features (e.g. phone_position): read from the "
                             "most positive 96-px window of the frame scaled to 480 px high, trained where the render "
                             "labels box the feature's parts; they then answer those features. Off by default")
-    train.add_argument("--detector", type=Path, metavar="FILE.onnx",
+    train.add_argument("--detector", metavar="yolov4-tiny|FILE.cfg|FILE.onnx",
                        help="with --windows: stack each window head with this photo-trained object detector's best "
-                            "score for the feature's class (an ONNX export in the Ultralytics YOLO layout; none "
-                            "ships with the product, the card records its licence); copied into the model folder")
+                            "score for the feature's class: yolov4-tiny (built in, public domain, COCO), a darknet "
+                            "YOLO (FILE.cfg with FILE.weights and its .names beside) or an ONNX export in the "
+                            "Ultralytics YOLO layout; copied into the model folder, its licence on the card")
+    train.add_argument("--detector-tiles", type=int, choices=(1, 2),
+                       help="with --detector: 2 reads the frame and a 2x2 grid of overlapping tiles scaled up to the "
+                            "detector's input, its best score counting (a phone is near the smallest a YOLO finds "
+                            "in a whole frame); 1 the whole frame only (default 2)")
     train.add_argument("--detector-class", action="append", metavar="FEATURE=CLASS",
                        help="the detector class a window feature reads (default phone_position='cell phone'); "
                             "repeat for more")
@@ -71,9 +76,9 @@ def register(sub) -> None:
 
 DEFAULTS = {"n": 600, "held_out": 200, "seed": 0, "preset": "draft", "camera": "default", "cabin": "default"}
 FROM_SCRATCH = ("n", "held_out", "seed", "preset", "check_preset", "camera", "cabin", "fine_tune", "windows",
-                "detector", "detector_class")
-OPTIONAL = ("fine_tune", "windows", "detector", "detector_class")   # claimed only when given: a model claimed
-                                                                    # before they existed resumes as before
+                "detector", "detector_class", "detector_tiles")
+# claimed only when given: a model claimed before they existed resumes as before
+OPTIONAL = ("fine_tune", "windows", "detector", "detector_class", "detector_tiles")
 
 
 def cmd_train(args) -> int:
@@ -104,7 +109,7 @@ def cmd_train_new(args) -> int:
     detector = _detector(args, windows)
     claimed = {k: getattr(args, k) for k in FROM_SCRATCH if k not in OPTIONAL or getattr(args, k) is not None}
     if detector:   # the file's content, not its name: another file at the same path is another training
-        claimed["detector"] = detector.detector.sha256
+        claimed["detector"], claimed["detector_tiles"] = detector.detector.sha256, detector.tiles
     output = _claim(args, out, {"space": space.hash, **claimed,
                                 **{k: v for k, v in variety.describe().items() if k in VARIETY}})
 
@@ -133,10 +138,11 @@ def _detector(args, windows):
     """The detector the window heads stack with (None when not asked for), opened and checked before rendering."""
     from ..reference.detector import open_for_windows
 
-    if args.detector is None and args.detector_class:
-        raise InputError("--detector-class names the class a --detector reads; give --detector FILE.onnx too")
+    if args.detector is None and (args.detector_class or args.detector_tiles):
+        raise InputError("--detector-class and --detector-tiles say how a --detector reads; give --detector too "
+                         "(e.g. --detector yolov4-tiny)")
     return open_for_windows(args.detector, windows, args.detector_class, "--detector stacks with window heads: "
-                            "give --windows FEATURE too (e.g. --windows phone_position)")
+                            "give --windows FEATURE too (e.g. --windows phone_position)", args.detector_tiles or 2)
 
 
 def cmd_retrain(args) -> int:

@@ -10,7 +10,7 @@ from ..space import SceneSpace
 from .backbone import Backbone, read_rgb
 from .captioner import describe
 from .heads import load_heads, load_window_heads
-from .detector import FrameDetector
+from .detector import FrameDetector, open_in_model
 from .stacking import Stacking
 from .windows import WindowSettings, frame_probabilities
 from ..errors import InputError
@@ -39,15 +39,11 @@ def detector_of(model_dir: Path, meta: dict) -> FrameDetector | None:
     about = (meta.get("windows") or {}).get("detector")
     if not about:
         return None
-    path = Path(model_dir) / about["file"]
-    if not path.is_file():
-        raise InputError(f"the model in {model_dir} stacks its window heads with a detector, and {path} is missing; "
-                         "copy the model folder whole")
-    detector = FrameDetector.open(path, about["classes"])
+    detector = open_in_model(Path(model_dir), about)
     if detector.detector.sha256 != about["sha256"]:
-        raise InputError(f"{path} is not the detector the model in {model_dir} was fitted with (sha256 "
-                         f"{detector.detector.sha256[:12]}, not {about['sha256'][:12]}); copy the model folder "
-                         "whole, or train the model again")
+        raise InputError(f"{Path(model_dir) / about['file']} is not the detector the model in {model_dir} was fitted "
+                         f"with (sha256 {detector.detector.sha256[:12]}, not {about['sha256'][:12]}); copy the model "
+                         "folder whole, or train the model again")
     return detector
 
 

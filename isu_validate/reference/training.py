@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import hashlib
 import json
-import shutil
+import shlex
 import time
 from collections import defaultdict
 from dataclasses import dataclass
@@ -20,13 +20,13 @@ from typing import Callable, Mapping
 
 import numpy as np
 
-from ..progress import Progress
+from ..progress import Progress, tracked
 from ..space import SceneSpace
 from .backbone import Backbone, read_rgb
 from .feature_bank import FILES, FeatureSet, save_bank
 from .fine_tune import WEIGHTS_FILE, FineTune, fine_tune_backbone, save_tuned
 from .heads import CLIP_SIGMA, REGULARISATION_C, Head, fit_head, save_heads
-from .detector import DETECTOR_FILE, FrameDetector
+from .detector import FrameDetector
 from .windows import WindowSettings, fit_window_heads, frame_probabilities, save_held_out
 from ..errors import InputError
 
@@ -261,7 +261,7 @@ def _window_accuracy(space: SceneSpace, settings: WindowSettings, heads: list[He
                      ) -> tuple[dict, list[dict]]:
     """(the window heads' accuracy on ``examples``, their class probabilities per example: {} where not asked)."""
     read = []
-    for example in examples:
+    for example in tracked(examples, "window heads: held-out frames"):
         asked = [h for h in heads if h.feature in example.scene]
         rgb = read_rgb(example.image) if asked else None
         seen = detector.log_odds(rgb, [h.feature for h in asked]) if detector and asked else None
@@ -314,8 +314,7 @@ def write_model(out: Path, heads: list[Head], card: dict, bank: list[FeatureSet]
         meta["windows"] = {k: card["windows"][k] for k in ("features", "height", "cells", "calibration", "detector")
                            if k in card["windows"]}
     if detector is not None:   # the model folder carries its detector, as it carries a tuned backbone
-        out.mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(detector.detector.path, out / DETECTOR_FILE)
+        detector.detector.copy_into(out)
     if backbone is not None and backbone.tuned_blocks:
         out.mkdir(parents=True, exist_ok=True)
         meta["backbone_weights"] = save_tuned(backbone, out)
@@ -443,8 +442,10 @@ def _detector_lines(detector: dict | None) -> list[str]:
     if not detector:
         return []
     classes = ", ".join(f"`{f}` <- '{c}'" for f, c in detector["classes"].items())
+    views = "the frame and its 2x2 tiles" if detector.get("tiles", 1) == 2 else "the whole frame"
     return [f"- Detector: each window head is stacked with an object detector's best score ({classes}; "
-            f"`{detector['file']}`, sha256 {detector['sha256'][:12]}, input {detector['input']} px), the stacking "
+            f"`{detector['file']}`, sha256 {detector['sha256'][:12]}, input {detector['input']} px, over {views}), "
+            "the stacking "
             "fitted on the training renders with the window's log-odds out of fold. The detector was trained by its "
             f"makers on their own data (for a COCO detector, photographs), not by this project; its licence: "
             f"{detector['licence']}"]
@@ -453,7 +454,9 @@ def _detector_lines(detector: dict | None) -> list[str]:
 def _detector_flags(detector: dict | None) -> str:
     if not detector:
         return ""
-    return " --detector DETECTOR.onnx" + "".join(f" --detector-class {f}='{c}'" for f, c in detector["classes"].items())
+    named = shlex.quote(detector["named"]) if "named" in detector else "DETECTOR.onnx"   # fitted before it was kept
+    return (f" --detector {named} --detector-tiles {detector.get('tiles', 1)}"
+            + "".join(f" --detector-class {f}='{c}'" for f, c in detector["classes"].items()))
 
 
 def _variety_flags(variety: dict | None) -> str:

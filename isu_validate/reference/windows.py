@@ -26,6 +26,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import InputError
+from ..progress import tracked
 from .backbone import CELL_PX, Backbone, read_rgb
 from .detector import FrameDetector
 from .heads import Head, fit_head
@@ -131,7 +132,8 @@ def fit_window_heads(space, settings: WindowSettings, backbone: Backbone, images
     # one stream per feature, so that a feature's windows do not change with the other features asked for
     rngs = {name: np.random.default_rng([seed, zlib.crc32(name.encode())]) for name in settings.features}
     examples: dict[str, list[tuple[int, np.ndarray, str]]] = {name: [] for name in settings.features}
-    for frame, (image, scene, label) in enumerate(zip(images, scenes, labels, strict=True)):
+    frames = list(zip(images, scenes, labels, strict=True))
+    for frame, (image, scene, label) in enumerate(tracked(frames, "window heads: reading training frames")):
         asked = [n for n in settings.features if n in scene]
         if not asked:
             continue
@@ -152,7 +154,8 @@ def fit_window_heads(space, settings: WindowSettings, backbone: Backbone, images
     # a second pass over the frames: the calibration needs the fitted heads, and keeping every frame's map from the
     # first pass would hold about 1 MB a frame (600 MB for 600 renders) to save a minute
     read_frames = [_read_training_frame(settings, backbone, heads, fold_heads, fold_of[i], image, scene, detector)
-                   for i, (image, scene) in enumerate(zip(images, scenes, strict=True))]
+                   for i, (image, scene) in enumerate(tracked(list(zip(images, scenes, strict=True)),
+                                                               "window heads: scoring training frames"))]
     stackings, read = {}, [{} for _ in images]
     for head in heads:
         name, feature = head.feature, space.features[head.feature]
