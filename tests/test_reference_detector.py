@@ -219,12 +219,14 @@ def test_a_bench_recipe_names_its_detector_by_content_and_refuses_one_it_cannot_
     tiles = parse_recipe(f"side=train:n=4,windows=phone_position,detector={detector_file},detector_tiles=1")
     assert json.loads(recipe_settings(tiles, args)[1])["detector_tiles"] == 1
     assert "detector_sha256" not in json.loads(recipe_settings(parse_recipe("side=train:n=4"), args)[1])
+    with pytest.raises(InputError, match="detector_tiles= says how a detector= reads; add detector=yolov4-tiny"):
+        _train(parse_recipe("side=train:n=4,windows=phone_position,detector_tiles=1"), tmp_path / "c", args)
     with pytest.raises(InputError, match="detector= stacks with window heads; add windows=FEATURE"):
         _train(parse_recipe(f"side=train:n=4,detector={detector_file}"), tmp_path / "a", args)
     with pytest.raises(InputError, match="no such file"):
         _train(parse_recipe(f"side=train:n=4,windows=phone_position,detector={tmp_path / 'x.onnx'}"),
                tmp_path / "b", args)
-    assert not (tmp_path / "a" / "cache").exists() and not (tmp_path / "b" / "cache").exists()   # nothing rendered
+    assert not any((tmp_path / n / "cache").exists() for n in "abc")   # nothing rendered
 
 
 # ---------------------------------------------------------------------------------------------- darknet detectors
@@ -269,6 +271,10 @@ def test_a_darknet_detector_reads_its_three_files_and_keeps_low_scores_to_rank_f
     # OpenCV zeroes the class scores of boxes under the layer's threshold (the cfg's 0.25 here); read with it at 0,
     # a frame with no phone still has a score below the others, so frames rank
     assert 0 < low < 1e-4 and low < detector.best_scores(purple, ["cell phone"])["cell phone"] < 0.02
+    # a YOLOv2 [region] layer's threshold goes to 0 as a [yolo] layer's does; a stated one is replaced
+    from isu_validate.reference.detector import _keep_low_scores
+    assert _keep_low_scores("[region]\nthresh = .6\nclasses=2\n[yolo]\nclasses=2\n") == (
+        "[region]\nthresh=0\nclasses=2\n[yolo]\nthresh=0\nclasses=2\n")
     # the digest covers all three files: other class names are another detector
     other = darknet_detector(tmp_path / "b", names=("person", "cell phone", "cup"))
     assert open_detector(other).sha256 != detector.sha256

@@ -174,6 +174,9 @@ def _train(recipe: Recipe, folder: Path, args) -> tuple[Path, Path, str]:
     space = load_space(o["space"])
     variety = Variety.parse(o["camera_jitter"], o["sensor_effects"], o["seed"])
     tuning, windows = FineTune.optional(o.get("fine_tune"), o["seed"]), WindowSettings.parse(o.get("windows"), space)
+    if o.get("detector_tiles") and not o.get("detector"):
+        raise InputError(f"--recipe {recipe.name}: detector_tiles= says how a detector= reads; add "
+                         "detector=yolov4-tiny (or a file), or leave detector_tiles out")
     detector = open_for_windows(o.get("detector"), windows, None,   # its default classes
                                 f"--recipe {recipe.name}: detector= stacks with window heads; add windows=FEATURE",
                                 o.get("detector_tiles") or 2)

@@ -292,10 +292,11 @@ def _darknet_size(cfg: str, label: str) -> int:
 
 
 def _keep_low_scores(cfg: str) -> str:
-    """The cfg with each [yolo] layer's score threshold at 0: OpenCV zeroes the class scores of boxes under it, and
-    a frame's best score must rank frames, not only pass a detection threshold (a stated thresh is replaced)."""
+    """The cfg with each output layer's ([yolo], or YOLOv2's [region]) score threshold at 0: OpenCV zeroes the class
+    scores of boxes under it, and a frame's best score must rank frames, not only pass a detection threshold (a
+    stated thresh is replaced)."""
     cfg = re.sub(r"^\s*thresh\s*=.*$\n?", "", cfg, flags=re.M)
-    return re.sub(r"^\[yolo\]\s*$", "[yolo]\nthresh=0", cfg, flags=re.M)
+    return re.sub(r"^\[(yolo|region)\]\s*$", r"[\1]\nthresh=0", cfg, flags=re.M)
 
 
 def _onnx_names(text: str | None, label: str) -> list[str]:
