@@ -14,7 +14,7 @@ import pytest
 
 from isu_validate.errors import InputError
 from isu_validate.reference.backbone import read_rgb
-from isu_validate.reference.detector import (DETECTOR_FILE, DarknetYolo, FrameDetector, OnnxYolo, logit,
+from isu_validate.reference.detector import (DETECTOR_FILE, DarknetYolo, FrameDetector, OnnxYolo, digest_of, logit,
                                             open_detector, open_in_model, parse_classes, views)
 from isu_validate.reference.model import ReferenceISU
 from isu_validate.reference.stacking import FOLDS, Stacking, folds
@@ -278,6 +278,7 @@ def test_a_darknet_detector_reads_its_three_files_and_keeps_low_scores_to_rank_f
     # the digest covers all three files: other class names are another detector
     other = darknet_detector(tmp_path / "b", names=("person", "cell phone", "cup"))
     assert open_detector(other).sha256 != detector.sha256
+    assert digest_of(cfg) == detector.sha256 and digest_of(other) == open_detector(other).sha256   # without running
     # coco.names beside the cfg serves when FILE.names is absent
     coco = darknet_detector(tmp_path / "c", names_file="coco.names")
     assert open_detector(coco).names == ["person", "cell phone"]
@@ -344,5 +345,6 @@ def test_the_built_in_yolov4_tiny_opens_and_scores_a_frame():
     about = detector.describe()
     assert about["input"] == 416 and about["named"] == "yolov4-tiny" and "public domain" in about["licence"]
     assert len(detector.detector.names) == 80 and detector.detector.names[67] == "cell phone"
+    assert digest_of("yolov4-tiny") == detector.detector.sha256
     z = detector.log_odds(painted(200, (90, 90, 90)), ["phone_position"])["phone_position"]
     assert np.isfinite(z) and z < 0          # a grey square on black is no phone

@@ -143,13 +143,13 @@ def _made_with(options: dict) -> dict:
 def _detector_made_with(options: dict) -> dict:
     """The detector by its content, not its name (a missing file is refused by name before rendering), and the views
     it reads (a recipe that leaves them out reads the default, so a kept model read otherwise is another recipe)."""
-    from ..reference.detector import open_detector
+    from ..reference.detector import DEFAULT_TILES, digest_of
 
     try:
-        digest = open_detector(options["detector"]).sha256
+        digest = digest_of(options["detector"])
     except InputError:
         digest = "missing"
-    return {"detector_sha256": digest, "detector_tiles": options.get("detector_tiles") or 2}
+    return {"detector_sha256": digest, "detector_tiles": options.get("detector_tiles") or DEFAULT_TILES}
 
 
 def _train(recipe: Recipe, folder: Path, args) -> tuple[Path, Path, str]:
@@ -179,7 +179,7 @@ def _train(recipe: Recipe, folder: Path, args) -> tuple[Path, Path, str]:
                          "detector=yolov4-tiny (or a file), or leave detector_tiles out")
     detector = open_for_windows(o.get("detector"), windows, None,   # its default classes
                                 f"--recipe {recipe.name}: detector= stacks with window heads; add windows=FEATURE",
-                                o.get("detector_tiles") or 2)
+                                o.get("detector_tiles"))
     renderer = vary(open_renderer(preset=o["preset"], camera=o["camera"], cabin=o["cabin"], space=space,
                                   cache_dir=folder / "cache", log_dir=folder / "logs", device=args.render_device),
                     variety)

@@ -142,7 +142,7 @@ def _detector(args, windows):
         raise InputError("--detector-class and --detector-tiles say how a --detector reads; give --detector too "
                          "(e.g. --detector yolov4-tiny)")
     return open_for_windows(args.detector, windows, args.detector_class, "--detector stacks with window heads: "
-                            "give --windows FEATURE too (e.g. --windows phone_position)", args.detector_tiles or 2)
+                            "give --windows FEATURE too (e.g. --windows phone_position)", args.detector_tiles)
 
 
 def cmd_retrain(args) -> int:

