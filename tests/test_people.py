@@ -544,3 +544,73 @@ def test_a_phone_held_to_be_read_shows_its_back_or_edge_to_the_passenger_side_ca
         assert 0 <= u < camera.width and 0 <= v < camera.height, position   # the phone is in the frame
         assert _screen_towards(camera.position, pose) < EDGE_ON, position
         assert _screen_towards(before, pose) > 0.15, position
+
+
+def test_a_tilt_turns_the_phone_about_its_own_axes_by_the_positions_shares():
+    """seated.tilted: tip brings the phone's top towards its screen's side, roll turns it about its length, turn
+    about its screen's normal; a position's `tilt` shares scale each (at the ear only the turn, along the cheek);
+    no tilt is the rig's angle itself."""
+    from isu_validate.render.people.seated import _euler_xyz, tilted
+    positions = load_cabin("default")["phone_positions"]
+    reading, ear = positions["P5"], positions["P1"]
+    rig = _euler_xyz(reading["rotation_deg"])
+    assert tilted(reading, (0.0, 0.0, 0.0)) is reading and tilted(None, (10.0, 0.0, 0.0)) is None
+
+    def turned(spec, tilt):
+        return tilted(spec, tilt)["rotation"]
+
+    tip = turned(reading, (20.0, 0.0, 0.0))
+    np.testing.assert_allclose(tip[:, 0], rig[:, 0], atol=1e-9)                       # about the width
+    assert tip[:, 1] @ rig[:, 2] == pytest.approx(np.sin(np.radians(20.0)), abs=1e-9)  # top to the screen's side
+    roll = turned(reading, (0.0, 20.0, 0.0))
+    np.testing.assert_allclose(roll[:, 1], rig[:, 1], atol=1e-9)
+    assert roll[:, 2] @ rig[:, 2] == pytest.approx(np.cos(np.radians(20.0)), abs=1e-9)
+    turn = turned(reading, (0.0, 0.0, 20.0))
+    np.testing.assert_allclose(turn[:, 2], rig[:, 2], atol=1e-9)
+    assert turn[:, 1] @ rig[:, 1] == pytest.approx(np.cos(np.radians(20.0)), abs=1e-9)
+    # at the ear the phone lies against the cheek: tip and roll are ignored, the turn is kept
+    assert ear["tilt"] == [0.0, 0.0, 1.0]
+    at_ear, rig_ear = turned(ear, (20.0, -20.0, 15.0)), _euler_xyz(ear["rotation_deg"])
+    np.testing.assert_allclose(at_ear[:, 2], rig_ear[:, 2], atol=1e-9)
+    assert at_ear[:, 1] @ rig_ear[:, 1] == pytest.approx(np.cos(np.radians(15.0)), abs=1e-9)
+
+
+def test_a_scenes_phone_tilt_is_zero_without_a_phone_and_keys_the_store_only_when_set():
+    tilt_of = people_module.phone_tilt_of
+    assert tilt_of({"phone_position": "NONE", "phone_tip": 12.0}) == (0.0, 0.0, 0.0)   # an inactive feature's value
+    assert tilt_of({"phone_position": "P5"}) == (0.0, 0.0, 0.0)                        # isu-paper: the rig's angle
+    assert tilt_of({"phone_position": "P5", "phone_tip": 12.34, "phone_roll": -3.06, "phone_turn": None}) == \
+        (12.3, -3.1, 0.0)
+    assert people_module._tilt_input((0.0, 0.0, 0.0)) == {}   # entries posed before the tilt keep their keys
+    assert people_module._tilt_input((12.3, 0.0, 0.0)) == {"phone_tilt": [12.3, 0.0, 0.0]}
+
+
+@pytest.mark.parametrize("gender, height, weight, position, tilt", [
+    ("FEMALE", "H1", "W1", "P5", (20.0, -20.0, 20.0)), ("MALE", "H4", "W4", "P9", (-20.0, 20.0, -20.0)),
+    ("MALE", "H2", "W2", "P10", (20.0, 20.0, -20.0)), ("FEMALE", "H3", "W2", "P1", (0.0, 0.0, 20.0))])
+def test_a_phone_tilted_in_the_hand_is_gripped_as_at_the_rigs_angle(people, gender, height, weight, position, tilt):
+    """isu-diverse's phone_tip, phone_roll and phone_turn at their limits: the pose holds the phone at the tilted
+    angle, the fingers close round its edge, and the body still clears seat and wheel."""
+    from isu_validate.render.people.seated import _euler_xyz, tilted
+    spec = people.cabin["phone_positions"][position]
+    state = _load(people.driver_state(gender, height, weight, "SERIOUS", position, None, "WHEEL", "ROAD", tilt))
+    np.testing.assert_allclose(state["phone_rotation"], tilted(spec, tilt)["rotation"], atol=1e-5)
+    moved = np.degrees(np.arccos(np.clip((np.trace(_euler_xyz(spec["rotation_deg"]).T @ state["phone_rotation"])
+                                          - 1) / 2, -1, 1)))
+    assert moved > 15.0, f"{position}: the phone turned only {moved:.1f} deg from the rig's angle"
+    m = driver_measures(state, _load(people.topology("female" if gender == "FEMALE" else "male")), people.cabin)
+    for part in ("cushion", "back", "base", "headrest0", "wheel_body"):
+        assert m[f"clear_{part}"] >= 0.0, (position, tilt, part, m)
+    assert m["clear_wheel_hands"] >= -HAND_TOUCH, (position, tilt, m)
+    assert m["phone_to_palm"] < 0.016 and m["phone_clear_hand"] > -PHONE_PRESS, (position, tilt, m)
+    assert m["phone_front_touch"] >= 20, (position, tilt, m)
+
+
+def test_a_phone_position_with_malformed_tilt_shares_is_refused_with_the_fix(tmp_path):
+    from isu_validate.render.cabin import CabinRigError
+    text = (Path(__file__).parents[1] / "rigs" / "cabins" / "default.toml").read_text()
+    bad = tmp_path / "bad.toml"
+    bad.write_text(text.replace("tilt = [0.0, 0.0, 1.0]", "tilt = [0.0, 1.5]", 1))
+    with pytest.raises(CabinRigError, match=r"phone_positions.P1\] tilt must be three shares \[tip, roll, turn\] "
+                                            r"between 0 and 1"):
+        load_cabin(bad)

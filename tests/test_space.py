@@ -185,7 +185,8 @@ def test_a_space_extends_another_adding_features_and_keeping_its_constraints(tmp
     assert diverse.names[:len(SPACE.names)] == SPACE.names
     looks = ("driver_skin_tone", "driver_hair_colour", "driver_hair_style", "driver_top", "driver_top_print",
              "driver_print_colour", "driver_jacket_colour", "driver_trousers_colour", "driver_eyewear", "driver_cap",
-             "driver_watch", "driver_hands", "drink", "phone_screen", "driver_gaze")
+             "driver_watch", "driver_hands", "drink", "phone_screen", "driver_gaze", "phone_case", "phone_tip",
+             "phone_roll", "phone_turn")
     assert set(diverse.names) - set(SPACE.names) == set(looks) | {"surroundings", "sun_direction", "cabin_trim",
                                                                   "seat_material"}
     # every value of what the hands do is a position the default rig has (or both hands on the wheel)

@@ -110,6 +110,10 @@ def _check(raw: dict, where: str) -> None:
         if not isinstance(spec.get("at_ear", False), bool):
             raise CabinRigError(f"{where}: [phone_positions.{name}] at_ear must be true or false (a call: the "
                                 f"screen is dark), got {spec['at_ear']!r}")
+        if "tilt" in spec and not _shares(spec["tilt"]):
+            raise CabinRigError(f"{where}: [phone_positions.{name}] tilt must be three shares [tip, roll, turn] "
+                                f"between 0 and 1 (how much of the space's phone_tip, phone_roll and phone_turn the "
+                                f"phone takes there), got {spec['tilt']!r}")
     for name, spec in raw.get("hand_positions", {}).items():
         if not (_reaches(spec) and all(_triple(spec.get(k)) for k in ("offset", "palm", "fingers"))):
             raise CabinRigError(f"{where}: [hand_positions.{name}] needs hand = 'left'|'right', relative_to = "
@@ -157,6 +161,11 @@ def _check_lighting(light: dict, where: str) -> None:
 def _triple(value) -> bool:
     return isinstance(value, list) and len(value) == 3 and all(
         isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
+
+
+def _shares(value) -> bool:
+    return isinstance(value, list) and len(value) == 3 and all(
+        isinstance(v, (int, float)) and not isinstance(v, bool) and 0.0 <= v <= 1.0 for v in value)
 
 
 def _resolve_assets(assets: dict, rig_path: Path) -> dict:

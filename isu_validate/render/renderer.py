@@ -54,6 +54,11 @@ from .worker import BlenderWorker, WorkerCrashed, WorkerFailed, WorkerTimeout
 # can): new values that change no earlier scene's frame, so no bump
 # later (issue 44) driver_gaze (the head turned down to the hands, to the passenger or to the mirror): a new feature
 # whose ROAD is every earlier scene's frame, so no bump
+# later (issue 44) phone_case and phone_tip/roll/turn (the held phone's colour and angle in the hand): new features
+# whose GRAPHITE and 0 are every earlier scene's frame, so no bump. With them the held phone is placed as the pose
+# turned it: with the head turned and the phone at it (driver_gaze off the road, P1-P4 and P10) it kept the rig's
+# angle while the hand closed round the turned one (up to 30 deg apart). That changes isu-diverse frames that
+# driver_gaze added, never an isu-paper one; the people's code hash in every cache key renders them anew
 RENDERER_VERSION = "isu-blender-13"
 
 # what the worker shows for a feature the scene space does not have (or that is inactive)
@@ -76,7 +81,9 @@ DEFAULTS = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height
             # where the driver looks (isu-diverse varies it; isu-paper: the road)
             "driver_gaze": "ROAD",
             # the phone in the hand: lit while read, dark at the ear in a call (isu-diverse: also always on or off)
-            "phone_screen": "BY_USE"}
+            "phone_screen": "BY_USE",
+            # ... its case and the angle it is held at (isu-diverse varies them; isu-paper: graphite, the rig's angle)
+            "phone_case": "GRAPHITE", "phone_tip": 0.0, "phone_roll": 0.0, "phone_turn": 0.0}
 
 
 class BlenderRenderer:

@@ -20,6 +20,9 @@ from . import mesh as M
 from .cabin import euler_deg
 
 LUGGAGE = {"YELLOW": (0.78, 0.50, 0.01), "ANTHRACITE": (0.028, 0.030, 0.033)}
+# isu-diverse's phone_case (linear RGB): most phones are dark, but not every one, and a phone is its shape in a hand
+PHONE_CASES = {"GRAPHITE": (0.012, 0.013, 0.016), "WHITE": (0.70, 0.70, 0.68), "SILVER": (0.35, 0.36, 0.38),
+               "NAVY": (0.010, 0.020, 0.080), "RED": (0.40, 0.015, 0.015), "PINK": (0.75, 0.28, 0.36)}
 
 
 class Group:
@@ -125,7 +128,9 @@ def build_phone(coll, instance: str) -> Group:
     back."""
     g = Group(instance, coll)
     pid = INSTANCE_ID[instance]
-    case = M.material("phone_case", (0.012, 0.013, 0.016), roughness=0.3, specular=0.7)   # graphite
+    # the held phone's case takes isu-diverse's phone_case; the co-driver seat's stays graphite
+    case = M.material("phone_case" if instance == "phone" else f"{instance}_case", PHONE_CASES["GRAPHITE"],
+                      roughness=0.3, specular=0.7)
     glass = M.material("phone_glass", (0.004, 0.004, 0.005), roughness=0.03, specular=1.0)
     lens = M.material("phone_lens", (0.002, 0.002, 0.003), roughness=0.02, specular=1.0)
     ring = M.material("phone_lens_ring", (0.5, 0.5, 0.52), roughness=0.25, metallic=1.0)
@@ -304,7 +309,7 @@ class Objects:
     def apply(self, f: dict, hand_pose, can_pose=None) -> None:
         self._child_seat(f)
         self._luggage(f)
-        self._phone_in_hand(hand_pose, f.get("phone_screen", "BY_USE"))
+        self._phone_in_hand(hand_pose, f.get("phone_screen", "BY_USE"), f.get("phone_case", "GRAPHITE"))
         self._drink_in_hand(can_pose, f.get("drink", "CAN"))
         for feature, (part, build) in ON_CODRIVER_SEAT.items():
             self._on_codriver_seat(feature, f.get(feature) == "YES", part, build)
@@ -339,14 +344,17 @@ class Objects:
         group.place(anchor, (0, 0, math.radians(f["luggage_orientation"])))
         group.show(True)
 
-    def _phone_in_hand(self, hand_pose, screen: str) -> None:
+    def _phone_in_hand(self, hand_pose, screen: str, case: str) -> None:
         if hand_pose is None:
             self._show_only("phone:", None)
             return
         group = self._group("phone:hand", lambda: build_phone(self.coll, "phone"))
-        point, position = hand_pose
+        centre, R, position = hand_pose
         spec = self.rig["phone_positions"][position]
-        group.place(point, euler_deg(spec["rotation_deg"]))
+        # the pose's rotation, not the rig's angle: the hand closed round the phone tilted and turned with the head
+        group.place(Vector(centre.tolist()), Matrix([list(row) for row in R]).to_euler("XYZ"))
+        if not group.asset:
+            M.set_colour(bpy.data.materials["phone_case"], PHONE_CASES[case])
         group.show(True)
         lit = art.screen_lit(screen, spec.get("at_ear", False))    # dark: only the black glass shows
         for obj in group.parts:

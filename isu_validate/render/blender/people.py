@@ -139,8 +139,9 @@ class Driver:
         dressed = self.outfits[spec["topology"]].apply(spec["outfit"], spec["dressed"], f)
         self.belt.apply(dressed, f["seat_belt"] == "YES")   # the straps lie on the clothes
         self.phone_hand = self.can_hand = None
-        if "phone_centre" in data:   # the phone lies in the posed palm, turned as the rig's position says
-            self.phone_hand = (Vector(data["phone_centre"].tolist()), f["phone_position"])
+        if "phone_centre" in data:   # the phone lies in the posed palm, turned as the pose turned it
+            self.phone_hand = (np.asarray(data["phone_centre"], float), np.asarray(data["phone_rotation"], float),
+                               f["phone_position"])
         if "can_centre" in data:     # a can held to drink from (a rig hand position that holds one)
             self.can_hand = (np.asarray(data["can_centre"], float), np.asarray(data["can_rotation"], float))
 
@@ -154,7 +155,8 @@ class Driver:
         self.phone_hand = self.can_hand = None
 
     def hand_pose(self):
-        """(phone centre, phone position) when a hand holds the phone, else None."""
+        """(centre, 3x3 rotation: the rig's angle tilted in the hand and turned with the head, phone position)
+        when a hand holds the phone, else None."""
         return self.phone_hand
 
     def can_pose(self):

@@ -22,6 +22,8 @@ from .store import PeopleStore, entry_key, load_entry
 KINDS = ("male", "female", "child")
 JOINTS = ("root", "spine01", "neck01", "head")    # bone heads a state keeps (for measuring a pose)
 HAIR_STYLE = {"male": "short", "female": "bob", "child": "short"}   # a scene's BY_GENDER (and the child's)
+TILT_FEATURES = ("phone_tip", "phone_roll", "phone_turn")   # the phone turned in the hand (seated.tilted), degrees
+NO_TILT = (0.0, 0.0, 0.0)
 
 
 def hair_style_of(f: dict, kind: str) -> str:
@@ -56,7 +58,7 @@ class People:
             style = hair_style_of(f, kind)
             state = self.driver_state(f["driver_gender"], f["driver_height"], f["driver_weight"],
                                       f["driver_emotion"], f["phone_position"], style, f.get("driver_hands", "WHEEL"),
-                                      f.get("driver_gaze", "ROAD"))
+                                      f.get("driver_gaze", "ROAD"), phone_tilt_of(f))
             top = f.get("driver_top", "TSHIRT")
             out["driver"] = {"topology": str(self.topology(kind, style)), "state": str(state), "kind": kind,
                              "outfit": str(self.outfit(kind, style, top)),
@@ -78,18 +80,19 @@ class People:
             return self.store.put("topology", key, _topology(kind, style))
 
     def driver_state(self, gender: str, height: str, weight: str, emotion: str, phone_position: str,
-                     style: str | None = None, hands: str = "WHEEL", gaze: str = "ROAD"):
+                     style: str | None = None, hands: str = "WHEEL", gaze: str = "ROAD",
+                     phone_tilt: tuple[float, float, float] = NO_TILT):
         kind = "female" if gender == "FEMALE" else "male"
         style = style or HAIR_STYLE[kind]
         inputs = {"rig": self.driver_rig, "gender": gender, "height": height, "weight": weight,
                   "emotion": emotion, "phone_position": phone_position, "hair": style, "hands": hands,
-                  **_gaze_input(gaze)}
+                  **_gaze_input(gaze), **_tilt_input(phone_tilt)}
         key = entry_key("driver", inputs)
         found = self.store.get("driver", key)
         if found:
             return found
         with _posing(self):
-            pose = self._driver_pose(gender, height, weight, phone_position, hands, gaze)
+            pose = self._driver_pose(gender, height, weight, phone_position, hands, gaze, phone_tilt)
             topo = load_entry(self.topology(kind, style))
             phenotype, deltas = driver_phenotype(gender, height, weight), _deltas_from(pose)
             posed = Body(load_model(), phenotype, expressions.facial_actions(emotion)).evaluate(deltas)
@@ -134,17 +137,18 @@ class People:
             posed = child.pose_child(body, front_facing, self.cabin["anchors"]["child_seat"])
             return self.store.put("child", key, _surface_state(posed, topo))
 
-    def _driver_pose(self, gender, height, weight, phone_position, hands: str = "WHEEL", gaze: str = "ROAD") -> dict:
+    def _driver_pose(self, gender, height, weight, phone_position, hands: str = "WHEEL", gaze: str = "ROAD",
+                     phone_tilt: tuple[float, float, float] = NO_TILT) -> dict:
         """The expression-free pose (bone deltas), belt straps and phone placement of a driver."""
         key = entry_key("driver-pose", {"rig": self.driver_rig, "gender": gender, "height": height,
                                         "weight": weight, "phone_position": phone_position, "hands": hands,
-                                        **_gaze_input(gaze)})
+                                        **_gaze_input(gaze), **_tilt_input(phone_tilt)})
         found = self.store.load("driver-pose", key)
         if found:
             return found
         model = load_model()
         body = Body(model, driver_phenotype(gender, height, weight))
-        dp = seated.seat_and_pose(body, self.cabin, phone_position, hands, gaze)
+        dp = seated.seat_and_pose(body, self.cabin, phone_position, hands, gaze, phone_tilt)
         faces = model.faces.cpu().numpy()
         hardware = dict(self.cabin["seat_belt"])
         for part in ("buckle", "lap_anchor"):     # mounted on the seat: they slide with it
@@ -244,6 +248,19 @@ def _surface_state(posed, topo: dict) -> dict:
     return {"vertices": vertices.astype(np.float32), "hair": shell,
             "locks": hair.lock_vertices(locks, topo["hair_faces"], shell),
             "joints": np.array([posed.head(b) for b in JOINTS], np.float32)}
+
+
+def phone_tilt_of(f: dict) -> tuple[float, float, float]:
+    """A scene's (phone_tip, phone_roll, phone_turn) in degrees, to a tenth (the store's key): zero where the space
+    lacks them or no phone is in the hand (a scene may carry an inactive feature's drawn value)."""
+    if f.get("phone_position", "NONE") == "NONE":
+        return NO_TILT
+    return tuple(round(float(f.get(name) or 0.0), 1) for name in TILT_FEATURES)
+
+
+def _tilt_input(tilt) -> dict:
+    """A store key's phone tilt: none when the phone is held at the rig's angle (entries posed before keep theirs)."""
+    return {"phone_tilt": [round(float(d), 1) for d in tilt]} if any(tilt) else {}
 
 
 def _gaze_input(gaze: str) -> dict:

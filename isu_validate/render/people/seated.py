@@ -65,10 +65,11 @@ def anny_to_cabin() -> np.ndarray:
 
 
 def seat_and_pose(body: Body, rig: dict, phone_position: str = "NONE", hands: str = "WHEEL",
-                  gaze: str = "ROAD") -> DriverPose:
+                  gaze: str = "ROAD", phone_tilt: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> DriverPose:
     """Seat the body, slide the seat on its track until the wheel is in reach, turn the head to ``gaze`` (a rig
     gaze target; ROAD: eyes on the road), then place the hands: ``hands`` names a rig hand position for one hand
-    (WHEEL: both on the wheel); the phone's hand wins."""
+    (WHEEL: both on the wheel); the phone's hand wins. ``phone_tilt`` (tip, roll, turn in degrees) turns the
+    phone in the hand from the rig's angle (``tilted``), the hand turning with it."""
     free = rig.get("hand_positions", {}).get(hands)
     if hands != "WHEEL" and free is None:
         raise ValueError(f"the cabin rig has no [hand_positions.{hands}]; known: WHEEL, "
@@ -83,7 +84,7 @@ def seat_and_pose(body: Body, rig: dict, phone_position: str = "NONE", hands: st
         shift = float(np.clip(shift + _track_shift(rest, rig), *SEAT_TRACK))
     deltas, rest = _sit(body, rig, shift)
     head_centre = _head_centre(rest)
-    spec = rig["phone_positions"].get(phone_position)
+    spec = tilted(rig["phone_positions"].get(phone_position), phone_tilt)
     if look:
         at_head = any(s and s["relative_to"] == "head" for s in (spec, free))
         turn, neck = _head_turn(rest, deltas, body.parent, _gaze_point(rest, look, (spec, free), rig, head_centre),
@@ -248,6 +249,18 @@ def _head_turn(rest: Posed, deltas: dict, parent: dict, target: np.ndarray,
         D[:3, :3] = delta_for(rest.rot(parent[bone]), Q)[:3, :3] @ D[:3, :3]
         neck[bone] = D
     return turn, neck
+
+
+def tilted(spec: dict | None, tilt_deg) -> dict | None:
+    """A phone position turned in the hand from the rig's angle by ``tilt_deg`` = (tip, roll, turn) degrees: about
+    the phone's width (its top towards the screen's side), its length and its screen's normal (in the screen's
+    plane), each scaled by the position's ``tilt`` shares (at the ear the phone lies against the cheek: it only
+    turns along it). Real drivers hold a phone at any angle; the rig's is one of them."""
+    if not spec or not any(tilt_deg):
+        return spec
+    tip, roll, turn = (float(d) * share for d, share in zip(tilt_deg, spec.get("tilt", (1.0, 1.0, 1.0))))
+    local = rot_z(turn) @ rot_x(tip) @ rotation((0, 1, 0), math.radians(roll))
+    return {**spec, "rotation": _spec_rotation(spec) @ local}
 
 
 def _turned(spec: dict | None, turn: np.ndarray) -> dict | None:
