@@ -575,14 +575,21 @@ def test_a_tilt_turns_the_phone_about_its_own_axes_by_the_positions_shares():
     assert at_ear[:, 1] @ rig_ear[:, 1] == pytest.approx(np.cos(np.radians(15.0)), abs=1e-9)
 
 
-def test_a_scenes_phone_tilt_is_zero_without_a_phone_and_keys_the_store_only_when_set():
+def test_a_scenes_phone_tilt_is_zero_without_a_phone_and_keys_the_store_to_a_tenth_only_when_set(people):
     tilt_of = people_module.phone_tilt_of
     assert tilt_of({"phone_position": "NONE", "phone_tip": 12.0}) == (0.0, 0.0, 0.0)   # an inactive feature's value
     assert tilt_of({"phone_position": "P5"}) == (0.0, 0.0, 0.0)                        # isu-paper: the rig's angle
     assert tilt_of({"phone_position": "P5", "phone_tip": 12.34, "phone_roll": -3.06, "phone_turn": None}) == \
-        (12.3, -3.1, 0.0)
+        (12.34, -3.06, 0.0)
     assert people_module._tilt_input((0.0, 0.0, 0.0)) == {}   # entries posed before the tilt keep their keys
     assert people_module._tilt_input((12.3, 0.0, 0.0)) == {"phone_tilt": [12.3, 0.0, 0.0]}
+    # one pose per tenth of a degree: the key and the pose alike
+    near = [people.driver_state("MALE", "H2", "W2", "SERIOUS", "P5", None, "WHEEL", "ROAD", (t, 0.0, 0.0))
+            for t in (12.34, 12.26)]
+    assert near[0] == near[1]
+    np.testing.assert_allclose(_load(near[0])["phone_rotation"],
+                               _load(people.driver_state("MALE", "H2", "W2", "SERIOUS", "P5", None, "WHEEL", "ROAD",
+                                                         (12.3, 0.0, 0.0)))["phone_rotation"], atol=1e-6)
 
 
 @pytest.mark.parametrize("gender, height, weight, position, tilt", [

@@ -84,6 +84,7 @@ class People:
                      phone_tilt: tuple[float, float, float] = NO_TILT):
         kind = "female" if gender == "FEMALE" else "male"
         style = style or HAIR_STYLE[kind]
+        phone_tilt = tuple(round(float(d), 1) for d in phone_tilt)   # the key and the pose: to a tenth of a degree
         inputs = {"rig": self.driver_rig, "gender": gender, "height": height, "weight": weight,
                   "emotion": emotion, "phone_position": phone_position, "hair": style, "hands": hands,
                   **_gaze_input(gaze), **_tilt_input(phone_tilt)}
@@ -251,16 +252,16 @@ def _surface_state(posed, topo: dict) -> dict:
 
 
 def phone_tilt_of(f: dict) -> tuple[float, float, float]:
-    """A scene's (phone_tip, phone_roll, phone_turn) in degrees, to a tenth (the store's key): zero where the space
-    lacks them or no phone is in the hand (a scene may carry an inactive feature's drawn value)."""
+    """A scene's (phone_tip, phone_roll, phone_turn) in degrees: zero where the space lacks them or no phone is in
+    the hand (a scene may carry an inactive feature's drawn value)."""
     if f.get("phone_position", "NONE") == "NONE":
         return NO_TILT
-    return tuple(round(float(f.get(name) or 0.0), 1) for name in TILT_FEATURES)
+    return tuple(float(f.get(name) or 0.0) for name in TILT_FEATURES)
 
 
 def _tilt_input(tilt) -> dict:
     """A store key's phone tilt: none when the phone is held at the rig's angle (entries posed before keep theirs)."""
-    return {"phone_tilt": [round(float(d), 1) for d in tilt]} if any(tilt) else {}
+    return {"phone_tilt": list(tilt)} if any(tilt) else {}
 
 
 def _gaze_input(gaze: str) -> dict:
