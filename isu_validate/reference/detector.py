@@ -101,7 +101,7 @@ class OnnxYolo(Detector):
         self.names = _onnx_names(meta.get("names"), self.label)
         self.size = _onnx_size(meta.get("imgsz"), self.session.get_inputs()[0].shape)
         self.licence = meta.get("license", "not stated in the file")
-        self.files = {DETECTOR_FILE: self.path}
+        self.files = files_of(self.path, self.label)
         self.sha256 = digest(self.files)
         self._check_layout()
 
@@ -141,12 +141,12 @@ class DarknetYolo(Detector):
         import cv2
 
         self.label = label or str(cfg)
-        weights, names = _darknet_files(Path(cfg), self.label)
+        self.files = files_of(Path(cfg), self.label)
+        weights, names = self.files["detector.weights"], self.files["detector.names"]
         self.names = [n.strip() for n in names.read_text(encoding="utf-8").splitlines() if n.strip()]
         text = Path(cfg).read_text(encoding="utf-8")
         self.size = _darknet_size(text, self.label)
         self.licence = licence or "not stated in the files"
-        self.files = {"detector.cfg": Path(cfg), "detector.weights": weights, "detector.names": names}
         self.sha256 = digest(self.files)
         try:
             self.net = cv2.dnn.readNetFromDarknet(np.frombuffer(_keep_low_scores(text).encode(), np.uint8),
@@ -198,11 +198,16 @@ def open_detector(spec: str | Path) -> Detector:
 def digest_of(spec: str | Path) -> str:
     """A detector's digest by its name, from its files alone (nothing is run): what ``open_detector(spec).sha256``
     gives once the files are read as a network."""
-    path = _main_file(spec)
+    return digest(files_of(_main_file(spec), str(spec)))
+
+
+def files_of(path: Path, label: str) -> dict[str, Path]:
+    """{its name in a model folder: the file} for a detector opened by ``path`` (a .onnx file, or a darknet .cfg with
+    its weights and names beside it); a darknet file missing is refused, naming it."""
     if path.suffix.lower() == ".onnx":
-        return digest({DETECTOR_FILE: path})
-    weights, names = _darknet_files(path, str(spec))
-    return digest({"detector.cfg": path, "detector.weights": weights, "detector.names": names})
+        return {DETECTOR_FILE: path}
+    weights, names = _darknet_files(path, label)
+    return {"detector.cfg": path, "detector.weights": weights, "detector.names": names}
 
 
 def digest(files: dict[str, Path]) -> str:

@@ -164,8 +164,7 @@ def _triple(value) -> bool:
 
 
 def _shares(value) -> bool:
-    return isinstance(value, list) and len(value) == 3 and all(
-        isinstance(v, (int, float)) and not isinstance(v, bool) and 0.0 <= v <= 1.0 for v in value)
+    return _triple(value) and all(0.0 <= v <= 1.0 for v in value)
 
 
 def _resolve_assets(assets: dict, rig_path: Path) -> dict:

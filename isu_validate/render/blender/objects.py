@@ -128,9 +128,8 @@ def build_phone(coll, instance: str) -> Group:
     back."""
     g = Group(instance, coll)
     pid = INSTANCE_ID[instance]
-    # the held phone's case takes isu-diverse's phone_case; the co-driver seat's stays graphite
-    case = M.material("phone_case" if instance == "phone" else f"{instance}_case", PHONE_CASES["GRAPHITE"],
-                      roughness=0.3, specular=0.7)
+    # each phone its own case material: the held phone's takes isu-diverse's phone_case, the co-driver seat's stays
+    case = M.material(case_material(instance), PHONE_CASES["GRAPHITE"], roughness=0.3, specular=0.7)
     glass = M.material("phone_glass", (0.004, 0.004, 0.005), roughness=0.03, specular=1.0)
     lens = M.material("phone_lens", (0.002, 0.002, 0.003), roughness=0.02, specular=1.0)
     ring = M.material("phone_lens_ring", (0.5, 0.5, 0.52), roughness=0.25, metallic=1.0)
@@ -151,6 +150,11 @@ def build_phone(coll, instance: str) -> Group:
     for obj in g.parts[-(2 * len(lenses) + 1):]:
         obj.rotation_euler = (math.pi, 0, 0)      # turned to face out of the back (-z)
     return g
+
+
+def case_material(instance: str) -> str:
+    """The name of a phone's case material (``build_phone``'s ``instance``)."""
+    return f"{instance}_case"
 
 
 # a 1 l PET bottle, radius against height from the base (m): petaloid foot, body, waist, shoulder, neck
@@ -354,7 +358,7 @@ class Objects:
         # the pose's rotation, not the rig's angle: the hand closed round the phone tilted and turned with the head
         group.place(Vector(centre.tolist()), Matrix([list(row) for row in R]).to_euler("XYZ"))
         if not group.asset:
-            M.set_colour(bpy.data.materials["phone_case"], PHONE_CASES[case])
+            M.set_colour(bpy.data.materials[case_material("phone")], PHONE_CASES[case])
         group.show(True)
         lit = art.screen_lit(screen, spec.get("at_ear", False))    # dark: only the black glass shows
         for obj in group.parts:
