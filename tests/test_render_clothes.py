@@ -154,10 +154,11 @@ def test_the_garments_and_accessories_show_in_a_draft_render_and_keep_the_belt_v
              "driver_eyewear": "NONE", "driver_cap": "NO", "driver_watch": "NO",
              # isu-diverse's world, car, hands and phone screen, as isu-paper renders them
              "surroundings": "TOWN", "cabin_trim": "GREY", "seat_material": "FABRIC", "driver_hands": "WHEEL",
-             "driver_gaze": "ROAD", "phone_screen": "BY_USE"}
+             "driver_gaze": "ROAD", "phone_screen": "BY_USE", "seat_belt_colour": "CHARCOAL"}
     variants = {"paper": None, "tshirt": {}, "long_sleeve": {"driver_top": "LONG_SLEEVE"},
                 "jacket": {"driver_top": "JACKET", "driver_jacket_colour": "NAVY"},
-                "sunglasses_cap": {"driver_eyewear": "SUNGLASSES", "driver_cap": "YES"}}
+                "sunglasses_cap": {"driver_eyewear": "SUNGLASSES", "driver_cap": "YES"},
+                "black_belt": {"seat_belt_colour": "BLACK"}, "beige_belt": {"seat_belt_colour": "BEIGE"}}
     frames = {}
     for space_name in ("isu-paper", "isu-diverse"):
         with open_renderer("draft", space=space_name, channels=("seg",), log_dir=tmp_path / "logs") as r:
@@ -185,3 +186,10 @@ def test_the_garments_and_accessories_show_in_a_draft_render_and_keep_the_belt_v
     assert n >= 150 and (jacket_seg == driver).sum() > (seg == driver).sum(), n
     n, cap_seg = changed("sunglasses_cap", face)  # dark lenses over the eyes, a peak over the face
     assert n >= 40 and (cap_seg == face).sum() > (seg == face).sum() + 20, n
+    # the webbing takes seat_belt_colour (charcoal by default); the strap stays where it was
+    belt = seg == INSTANCE_ID["seat_belt"]
+    assert belt.sum() >= 100
+    for name in ("black_belt", "beige_belt"):
+        assert (frames[name][1] == INSTANCE_ID["seat_belt"]).sum() == belt.sum(), name
+    black, beige = (frames[name][0][belt].mean() for name in ("black_belt", "beige_belt"))
+    assert black < img[belt].mean() - 10 < beige - 20, (black, img[belt].mean(), beige)

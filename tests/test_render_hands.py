@@ -18,7 +18,7 @@ BASE = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height": "
         "driver_top": "TSHIRT", "driver_top_print": "PLAIN", "driver_trousers_colour": "NAVY",
         "driver_eyewear": "NONE", "driver_cap": "NO", "driver_watch": "NO", "surroundings": "TOWN",
         "cabin_trim": "GREY", "seat_material": "FABRIC", "driver_hands": "WHEEL", "phone_screen": "BY_USE",
-        "driver_gaze": "ROAD"}
+        "driver_gaze": "ROAD", "seat_belt_colour": "CHARCOAL"}
 HELD = {"phone_case": "GRAPHITE", "phone_tip": 0.0, "phone_roll": 0.0, "phone_turn": 0.0}   # the paper's phone
 
 

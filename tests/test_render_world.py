@@ -34,7 +34,7 @@ SCENE = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height": 
          "driver_top": "TSHIRT", "driver_top_print": "PLAIN", "driver_trousers_colour": "NAVY",
          "driver_eyewear": "NONE", "driver_cap": "NO", "driver_watch": "NO",
          # ... both hands on the wheel, the screen as used
-         "driver_hands": "WHEEL", "driver_gaze": "ROAD", "phone_screen": "BY_USE"}
+         "driver_hands": "WHEEL", "driver_gaze": "ROAD", "phone_screen": "BY_USE", "seat_belt_colour": "CHARCOAL"}
 
 
 def _world_folder() -> Path:

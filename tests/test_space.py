@@ -188,7 +188,7 @@ def test_a_space_extends_another_adding_features_and_keeping_its_constraints(tmp
              "driver_watch", "driver_hands", "drink", "phone_screen", "driver_gaze", "phone_case", "phone_tip",
              "phone_roll", "phone_turn")
     assert set(diverse.names) - set(SPACE.names) == set(looks) | {"surroundings", "sun_direction", "cabin_trim",
-                                                                  "seat_material"}
+                                                                  "seat_material", "seat_belt_colour"}
     # every value of what the hands do is a position the default rig has (or both hands on the wheel)
     from isu_validate.render.cabin import load_cabin
     assert set(diverse.features["driver_hands"].values) == {"WHEEL"} | set(load_cabin("default")["hand_positions"])

@@ -59,6 +59,8 @@ from .worker import BlenderWorker, WorkerCrashed, WorkerFailed, WorkerTimeout
 # turned it: with the head turned and the phone at it (driver_gaze off the road, P1-P4 and P10) it kept the rig's
 # angle while the hand closed round the turned one (up to 30 deg apart). That changes isu-diverse frames that
 # driver_gaze added, never an isu-paper one; the people's code hash in every cache key renders them anew
+# later (issue 44) seat_belt_colour (the webbing: black, grey, beige besides charcoal): a new feature whose CHARCOAL
+# is every earlier scene's frame, so no bump
 RENDERER_VERSION = "isu-blender-13"
 
 # what the worker shows for a feature the scene space does not have (or that is inactive)
@@ -83,7 +85,9 @@ DEFAULTS = {"driver_gender": "MALE", "driver_emotion": "SERIOUS", "driver_height
             # the phone in the hand: lit while read, dark at the ear in a call (isu-diverse: also always on or off)
             "phone_screen": "BY_USE",
             # ... its case and the angle it is held at (isu-diverse varies them; isu-paper: graphite, the rig's angle)
-            "phone_case": "GRAPHITE", "phone_tip": 0.0, "phone_roll": 0.0, "phone_turn": 0.0}
+            "phone_case": "GRAPHITE", "phone_tip": 0.0, "phone_roll": 0.0, "phone_turn": 0.0,
+            # the seat belt's webbing (isu-diverse varies it; isu-paper: charcoal)
+            "seat_belt_colour": "CHARCOAL"}
 
 
 class BlenderRenderer:

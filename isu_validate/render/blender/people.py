@@ -16,7 +16,10 @@ from . import mesh as M
 from .clothes import Outfit
 from .people_look import Look
 
-BELT = (0.10, 0.10, 0.11)
+# isu-diverse's seat_belt_colour (linear RGB): CHARCOAL is isu-paper's belt. Webbing is mostly black or dark grey
+# in real cars, lighter grey or beige beside light trims; the belt is its diagonal across the body, not its colour
+BELTS = {"CHARCOAL": (0.10, 0.10, 0.11), "BLACK": (0.018, 0.018, 0.020), "GREY": (0.26, 0.26, 0.27),
+         "BEIGE": (0.40, 0.32, 0.22)}
 
 
 class Person:
@@ -137,7 +140,7 @@ class Driver:
             if topology != spec["topology"]:
                 outfit.hide()
         dressed = self.outfits[spec["topology"]].apply(spec["outfit"], spec["dressed"], f)
-        self.belt.apply(dressed, f["seat_belt"] == "YES")   # the straps lie on the clothes
+        self.belt.apply(dressed, f["seat_belt"] == "YES", f["seat_belt_colour"])   # the straps lie on the clothes
         self.phone_hand = self.can_hand = None
         if "phone_centre" in data:   # the phone lies in the posed palm, turned as the pose turned it
             self.phone_hand = (np.asarray(data["phone_centre"], float), np.asarray(data["phone_rotation"], float),
@@ -182,7 +185,7 @@ class _Belt:
 
     def __init__(self, hw: dict, coll):
         self.hw = {k: Vector(v) for k, v in hw.items()}
-        self.mat = M.material("belt", BELT, roughness=0.6)
+        self.mat = M.material("belt", BELTS["CHARCOAL"], roughness=0.6)
         self.worn = [self._obj(n, coll, INSTANCE_ID["seat_belt"]) for n in ("belt_shoulder", "belt_lap")]
         # an unused belt is part of the car: its mask class is cabin, so "seat_belt" means worn
         self.retracted = self._obj("belt_retracted", coll, INSTANCE_ID["cabin"])
@@ -202,7 +205,8 @@ class _Belt:
         for obj in [*self.worn, self.retracted]:
             obj.hide_render = True
 
-    def apply(self, data: dict, worn: bool) -> None:
+    def apply(self, data: dict, worn: bool, colour: str) -> None:
+        M.set_colour(self.mat, BELTS[colour])    # the car's belt: worn or hanging on the pillar
         for obj in self.worn:
             obj.hide_render = not worn
         self.retracted.hide_render = worn
