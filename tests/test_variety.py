@@ -229,6 +229,8 @@ def test_a_camera_jitter_needs_a_renderer_that_moves_its_camera(tmp_path, capsys
     assert "--camera-jitter needs a renderer that can move its camera" in err and len(err.strip().splitlines()) == 1
     assert _dataset(tmp_path / "ds2", "--n", "2", "--camera-jitter", "pos=1") == 2
     assert "pos must be between 0 and 0.1" in capsys.readouterr().err and not (tmp_path / "ds2").exists()
+    assert _dataset(tmp_path / "ds3", "--n", "2", "--camera-mix", "passenger-door") == 2
+    assert "--camera-mix needs a renderer that can move its camera" in capsys.readouterr().err
 
 
 # ---------------------------------------------------------------- the labels follow the camera (real Blender)
@@ -331,3 +333,66 @@ def test_reference_train_passes_its_variety_to_the_renderer_and_the_card(tmp_pat
     err = capsys.readouterr().err
     assert "focal must be between 0 and 0.3" in err and len(err.strip().splitlines()) == 1 and len(seen) == 2
 
+
+
+# ---------------------------------------------------------------- several viewpoints (camera mix)
+def test_a_camera_mix_sees_each_scene_through_one_of_its_rigs_seeded_and_then_jitters_it():
+    scenes = [SPACE.canonical(s) for s in SPACE.sample(np.random.default_rng(1), 60)]
+    mix = Variety.parse(None, None, 3, " passenger-door, passenger-side,passenger-door")
+    assert mix.cameras == ("passenger-door", "passenger-side") and mix.active and mix.moves_camera
+    first, again = VariedRenderer(_CameraHolder(), mix), VariedRenderer(_CameraHolder(), mix)
+    picks = [first.camera_for(s)[1]["rig"] for s in scenes]
+    assert picks == [again.camera_for(s)[1]["rig"] for s in scenes]               # seeded by the scene
+    assert {p: picks.count(p) for p in picks}.keys() == {"default", "passenger-door", "passenger-side"}
+    assert min(picks.count(p) for p in set(picks)) >= 10                            # uniform among three
+    camera, drawn = first.camera_for(scenes[0])
+    assert camera.name == drawn["rig"] and "shift_m" not in drawn
+    keys = {first.cache_key(s) for s in scenes}
+    assert len(keys) == len(scenes) and first.inner.used[-1].name == picks[-1]     # the key follows the camera used
+    # the jitter starts from the scene's rig, with the draw it had without a mix
+    jittered = VariedRenderer(_CameraHolder(), Variety.parse("angle=5", None, 3, "passenger-door,passenger-side"))
+    alone = VariedRenderer(_CameraHolder(), Variety.parse("angle=5", None, 3))
+    for scene, pick in zip(scenes[:6], picks):
+        camera, drawn = jittered.camera_for(scene)
+        rig = next(r for r in jittered.rigs if r.name == pick)
+        assert drawn["rig"] == pick and drawn["turn_deg"] == alone.camera_for(scene)[1]["turn_deg"]
+        assert camera.hash == rig.nudged(drawn["shift_m"], drawn["turn_deg"], drawn["focal_scale"]).hash
+
+
+def test_without_a_mix_the_keys_and_draws_of_earlier_sets_stay_as_they_were():
+    jitter = Variety.parse("pos=0.05,angle=5,focal=0.1", "mild", 3)
+    assert jitter.spec() == {"camera_jitter": "pos=0.05,angle=5,focal=0.1", "sensor_effects": jitter.effects.text,
+                             "seed": 3}
+    assert jitter.describe()["per_scene"].endswith("stream 1 the camera, 2 the effects")
+    assert "rig" not in VariedRenderer(_CameraHolder(), jitter).camera_for(SCENES[0])[1]
+    mixed = Variety.parse("pos=0.05,angle=5,focal=0.1", "mild", 3, "passenger-door")
+    assert mixed.spec() == {**jitter.spec(), "camera_mix": "passenger-door"}
+    assert mixed.describe()["per_scene"].endswith(", 3 the camera rig")
+    assert Variety.parse(None, None, 3, "") == Variety(seed=3) and not Variety.parse(None, None, 3, "none").active
+
+
+@pytest.mark.parametrize("mix, says", [("no-such-rig", "--camera-mix 'no-such-rig': no cameras rig named"),
+                                       ("passenger-door,default", "'default' is the set's own camera (--camera)")])
+def test_a_bad_camera_mix_is_refused_naming_the_rig_and_the_fix(mix, says):
+    with pytest.raises(InputError, match=None) as raised:
+        VariedRenderer(_CameraHolder(), Variety.parse(None, None, 0, mix))
+    assert says in str(raised.value)
+
+
+def test_reference_train_and_its_card_take_the_camera_mix(tmp_path, monkeypatch):
+    from isu_validate import render
+    from isu_validate.reference import training
+
+    seen = []
+    holder = _CameraHolder()
+    holder.render = _Painter().render
+    monkeypatch.setattr(render, "open_renderer", lambda **kw: holder)
+    monkeypatch.setattr(training, "train_reference", lambda *a, **extra: seen.append((a[1], extra)) or
+                        {"held_out": {"per_feature": {}}})
+    assert main(["reference", "train", "--n", "10", "--held-out", "1", "--seed", "4", "--workdir",
+                 str(tmp_path / "w"), "--camera-mix", "passenger-door"]) == 0
+    renderer, extra = seen[-1]
+    assert renderer.variety.cameras == ("passenger-door",) and extra["variety"]["camera_mix"] == "passenger-door"
+    assert training._variety_flags(extra["variety"]) == " --camera-mix passenger-door"
+    assert "- camera mix: each scene seen through the set's camera or one of `passenger-door`" in "\n".join(
+        render.variety.card_lines(extra["variety"]))

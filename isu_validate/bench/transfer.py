@@ -3,9 +3,10 @@ by side, each judged by what a reference ISU trained only on them does on the re
 
 A recipe is how the training renders are made, or a model already trained from renders:
 - ``NAME=train:camera=RIG,space=SPACE,cabin=RIG,preset=P,n=N,held_out=N,seed=S,camera_jitter=...,
-  sensor_effects=...,fine_tune=BLOCKS,windows=FEATURE,...,detector=yolov4-tiny|FILE,detector_tiles=1|2`` (every
-  key optional; the bench's --n, --held-out, --preset and --seed are the defaults; camera_jitter and
-  sensor_effects as ``reference train --camera-jitter/--sensor-effects`` take them, commas and all; fine_tune as
+  sensor_effects=...,camera_mix=RIG,...,fine_tune=BLOCKS,windows=FEATURE,...,detector=yolov4-tiny|FILE,
+  detector_tiles=1|2`` (every key optional; the bench's --n, --held-out, --preset and --seed are the defaults;
+  camera_jitter, sensor_effects and camera_mix as ``reference train --camera-jitter/--sensor-effects/--camera-mix``
+  take them, commas and all; fine_tune as
   ``reference train --fine-tune BLOCKS``; windows, detector and detector_tiles as ``reference train --windows
   --detector --detector-tiles``, its default classes): ``reference train`` as it is, in DIR/recipes/NAME (renders
   kept, so an interrupted bench goes on);
@@ -30,8 +31,9 @@ from ..transfer.arguments import add_real_set_arguments, parse_groups
 
 TRAIN_KEYS = {"camera": str, "cabin": str, "space": str, "preset": str, "n": int, "held_out": int, "seed": int,
               "camera_jitter": str, "sensor_effects": str, "fine_tune": int, "windows": str, "detector": str,
-              "detector_tiles": int}
-LISTS = ("camera_jitter", "sensor_effects", "windows")   # values that are lists themselves: pos=0.05,angle=5
+              "detector_tiles": int, "camera_mix": str}
+# values that are lists themselves: pos=0.05,angle=5; default,passenger-door
+LISTS = ("camera_jitter", "sensor_effects", "windows", "camera_mix")
 
 
 @dataclass
@@ -172,7 +174,7 @@ def _train(recipe: Recipe, folder: Path, args) -> tuple[Path, Path, str]:
     if (model / "heads.npz").is_file():
         return model, folder / "held-out", description
     space = load_space(o["space"])
-    variety = Variety.parse(o["camera_jitter"], o["sensor_effects"], o["seed"])
+    variety = Variety.parse(o["camera_jitter"], o["sensor_effects"], o["seed"], o.get("camera_mix"))
     tuning, windows = FineTune.optional(o.get("fine_tune"), o["seed"]), WindowSettings.parse(o.get("windows"), space)
     if o.get("detector_tiles") and not o.get("detector"):
         raise InputError(f"--recipe {recipe.name}: detector_tiles= says how a detector= reads; add "

@@ -18,8 +18,9 @@ def add_overwrite_option(parser, what: str) -> None:
 
 
 def add_variety_arguments(parser) -> None:
-    """``--camera-jitter`` and ``--sensor-effects``: variety per scene for training data (``render/variety.py``);
-    the same two options for ``dataset`` and ``reference train``. Light: the specs are parsed when the command runs."""
+    """``--camera-jitter``, ``--sensor-effects`` and ``--camera-mix``: variety per scene for training data
+    (``render/variety.py``); the same options for ``dataset`` and ``reference train``. Light: the specs are parsed
+    when the command runs."""
     parser.add_argument("--camera-jitter", metavar="SPEC",
                         help="move, turn and zoom the camera per scene, seeded by --seed and the scene: "
                              "pos=METRES,angle=DEGREES,focal=RELATIVE, each the largest either way, drawn uniformly "
@@ -28,3 +29,8 @@ def add_variety_arguments(parser) -> None:
                         help="camera effects applied after rendering, strengths seeded per scene: a recipe (mild, "
                              "strong) and/or maxima exposure=STOPS,white_balance=GAIN,vignette=SHARE,blur=SIGMA_PX,"
                              "noise=SIGMA_SHARE,jpeg=0..1 (e.g. mild,jpeg=0.6; default: none)")
+    parser.add_argument("--camera-mix", metavar="RIG[,RIG...]",
+                        help="see each scene through --camera or one of these camera rigs (names or .toml paths), "
+                             "drawn uniformly per scene, seeded by --seed and the scene, before any --camera-jitter: "
+                             "training data from more than one viewpoint (e.g. default,passenger-door); labels follow "
+                             "the camera used (default: --camera only)")

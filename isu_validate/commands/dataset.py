@@ -14,7 +14,7 @@ _DEFAULTS = DatasetSettings()
 # options that decide the images: left out on --resume, they take the stored value
 _IDENTITY = ("n", "seed", "space", "preset", "camera", "extrinsics_from", "cabin", "prompt_style", "from_runs", "focus",
              "styles", "style_models", "style_size", "style_steps", "camera_jitter", "sensor_effects",
-             "renderer_factory")
+             "camera_mix", "renderer_factory")
 
 
 def register(sub) -> None:

@@ -102,7 +102,7 @@ def cmd_train_new(args) -> int:
     if args.n < 10 or args.held_out < 1:
         raise InputError("use at least --n 10 training scenes and --held-out 1")
     space = load_space(args.space)
-    variety = Variety.parse(args.camera_jitter, args.sensor_effects, args.seed)
+    variety = Variety.parse(args.camera_jitter, args.sensor_effects, args.seed, args.camera_mix)
     out = args.out or args.workdir / "model"  # never the shipped model unless asked for by name
     checks = dict(parse_check(spec, args.held_out) for spec in args.check_preset)
     windows = WindowSettings.parse(args.windows, space)

@@ -127,7 +127,8 @@ def _new_info(folder: DatasetDir, settings: DatasetSettings, space: SceneSpace, 
 def _variety_seeds(settings: DatasetSettings) -> dict:
     variety = settings.variety()
     return {name: settings.seed for name, on in (("camera_jitter", variety.jitter.active),
-                                                  ("sensor_effects", variety.effects.active)) if on}
+                                                  ("sensor_effects", variety.effects.active),
+                                                  ("camera_mix", bool(variety.cameras))) if on}
 
 
 def _resume_info(folder: DatasetDir, settings: DatasetSettings) -> dict:

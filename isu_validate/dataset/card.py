@@ -123,6 +123,8 @@ def reproduce(settings: DatasetSettings, out: str) -> str:
         parts.append(f"--camera-jitter {settings.camera_jitter}")
     if settings.sensor_effects:
         parts.append(f"--sensor-effects {settings.sensor_effects}")
+    if settings.camera_mix:
+        parts.append(f"--camera-mix {settings.camera_mix}")
     if settings.styles:
         parts.append("--style " + " ".join(settings.styles))
         parts += [f"--style-model {m}" for m in settings.style_models]

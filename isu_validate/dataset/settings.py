@@ -14,9 +14,9 @@ from ..errors import InputError
 
 FOCUS_MODES = ("failing", "passing")
 RULE_PREFIX = "rule:"
-# the variety a command takes (--camera-jitter, --sensor-effects; `dataset`, `reference train`): off, they are
-# left out of an output's identity, so datasets and models made before them resume
-VARIETY = ("camera_jitter", "sensor_effects")
+# the variety a command takes (--camera-jitter, --sensor-effects, --camera-mix; `dataset`, `reference train`): off,
+# they are left out of an output's identity, so datasets and models made before them resume
+VARIETY = ("camera_jitter", "sensor_effects", "camera_mix")
 # how the work is spread: may change between a start and its --resume
 NOT_IDENTITY = ("workers", "cluster", "render_device", "device")   # how the work is done: a resume may change them
 
@@ -29,8 +29,8 @@ class DatasetSettings:
     (scenes drawn uniformly from the space), ``failing``, ``passing`` or ``rule:TEXT`` with ``from_runs``.
     ``styles``: style images, each giving every render a style-transferred copy (the fast net of
     ``style_models`` trained for that image, else Gatys at ``style_size`` px and ``style_steps``).
-    ``camera_jitter`` and ``sensor_effects``: variety per scene (``render/variety.py``), drawn from ``seed`` and
-    the scene; "" (the default) renders every slot through the camera file's camera, untouched.
+    ``camera_jitter``, ``sensor_effects`` and ``camera_mix``: variety per scene (``render/variety.py``), drawn from
+    ``seed`` and the scene; "" (the default) renders every slot through the camera file's camera, untouched.
     ``renderer_factory`` (``module:function``, called with the space) replaces Blender, for tests.
 
         settings = DatasetSettings(n=200, seed=1, preset="draft", from_runs=("runs/s1",), focus="failing")
@@ -51,6 +51,7 @@ class DatasetSettings:
     style_steps: int = 40
     camera_jitter: str = ""       # e.g. "pos=0.05,angle=5,focal=0.1" (render/camera_jitter.py)
     sensor_effects: str = ""      # e.g. "mild" or "noise=0.02,jpeg=0.5" (render/sensor_effects.py)
+    camera_mix: str = ""          # e.g. "default,passenger-door": rigs a slot may be seen through (render/variety.py)
     renderer_factory: str = ""
     workers: int = 1
     cluster: str | None = None
@@ -76,14 +77,16 @@ class DatasetSettings:
             raise InputError("--style-model needs --style IMG (the style images the models were trained for)")
         variety = self.variety()
         return replace(self, focus=focus, camera_jitter=variety.jitter.text, sensor_effects=variety.effects.text,
+                       camera_mix=",".join(_rig(name) for name in variety.cameras),
                        from_runs=_absolute(self.from_runs), styles=_absolute(self.styles),
                        style_models=_absolute(self.style_models), space=_rig(self.space), camera=_rig(self.camera),
                        cabin=_rig(self.cabin), extrinsics_from=_rig(self.extrinsics_from))
 
     def variety(self):
-        """The per-scene camera jitter and sensor effects (``render.variety.Variety``); InputError for a bad spec."""
+        """The per-scene camera jitter, sensor effects and camera mix (``render.variety.Variety``); InputError for a
+        bad spec."""
         from ..render.variety import Variety
-        return Variety.parse(self.camera_jitter, self.sensor_effects, self.seed)
+        return Variety.parse(self.camera_jitter, self.sensor_effects, self.seed, self.camera_mix)
 
     def to_dict(self) -> dict:
         out = asdict(self)

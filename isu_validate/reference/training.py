@@ -462,8 +462,8 @@ def _detector_flags(detector: dict | None) -> str:
 def _variety_flags(variety: dict | None) -> str:
     if not variety:
         return ""
-    return "".join(f" --{name.replace('_', '-')} {variety[name]}" for name in ("camera_jitter", "sensor_effects")
-                   if variety[name])
+    return "".join(f" --{name.replace('_', '-')} {variety[name]}"
+                   for name in ("camera_jitter", "sensor_effects", "camera_mix") if variety.get(name))
 
 
 def _by_light(result: dict, heading: str) -> list[str]:
