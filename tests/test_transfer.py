@@ -361,6 +361,8 @@ def test_bench_transfer_recipes_parse_and_a_model_recipe_runs(class_set, tmp_pat
     assert parse_recipe("side=train:camera=cam.toml,n=50").options == {"camera": "cam.toml", "n": 50}
     assert parse_recipe("v=train:camera_jitter=pos=0.05,angle=5,sensor_effects=mild,n=20").options == {
         "camera_jitter": "pos=0.05,angle=5", "sensor_effects": "mild", "n": 20}
+    assert parse_recipe("m=train:camera=passenger-side,camera_mix=default,passenger-door,seed=1").options == {
+        "camera": "passenger-side", "camera_mix": "default,passenger-door", "seed": 1}
     assert parse_recipe("r5=model:/m/r5,renders=/m/w/held-out").options == {"model": "/m/r5",
                                                                             "renders": "/m/w/held-out"}
     for bad, why in [("x", "must read NAME="), ("a=train:lens=3", "KEY one of"), ("a=train:n=many", "n must be int")]:
