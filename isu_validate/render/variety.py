@@ -155,7 +155,7 @@ def _mix_camera(name: str, own):
         camera = load_render_camera(name)
     except (OSError, ValueError) as exc:
         raise InputError(f"--camera-mix {name!r}: {exc}") from exc
-    if own is not None and camera.name == own.name:
+    if own is not None and camera.hash == own.hash:
         raise InputError(f"--camera-mix {name!r} is the set's own camera (--camera), which the mix holds already; "
                          "name only the other rigs")
     return camera
