@@ -106,7 +106,7 @@ def test_window_heads_stacked_with_the_detector_answer_as_the_card_says(stacked,
     assert (model / DETECTOR_FILE).read_bytes() == detector_file.read_bytes()   # the model folder carries it
     assert card["held_out"]["per_feature"]["phone_position"]["accuracy"] >= 0.9
     text = (model / "MODEL_CARD.md").read_text()
-    assert "- Detector: each window head is stacked with an object detector" in text
+    assert "- Detector: the window heads it has a class for are stacked with an object detector" in text
     assert "its licence: test stand-in, no licence" in text
     assert f"--detector {detector_file} --detector-tiles 2 --detector-class phone_position='cell phone'" in text
     assert about["tiles"] == 2 and "over the frame and its 2x2 tiles" in text
@@ -171,12 +171,43 @@ def test_detector_classes_default_for_the_phone_and_are_named_for_the_rest():
     assert parse_classes(None, ("phone_position",)) == {"phone_position": "cell phone"}
     assert parse_classes(["seat_belt=tie", "phone_position = mobile phone"], ("phone_position", "seat_belt")) == {
         "phone_position": "mobile phone", "seat_belt": "tie"}
-    with pytest.raises(InputError, match="no detector class for seat_belt"):
-        parse_classes(None, ("phone_position", "seat_belt"))
+    # COCO has no seat belt: a window feature without a class is calibrated alone, but a detector that stacks
+    # nothing is a slip
+    assert parse_classes(None, ("phone_position", "seat_belt")) == {"phone_position": "cell phone"}
+    with pytest.raises(InputError, match="no window feature has a detector class \\(seat_belt\\); name one with "
+                                         "--detector-class seat_belt=CLASS"):
+        parse_classes(None, ("seat_belt",))
     with pytest.raises(InputError, match="write FEATURE=CLASS"):
         parse_classes(["seat_belt"], ("seat_belt",))
     with pytest.raises(InputError, match="'driver_gender' has no window head"):
         parse_classes(["driver_gender=person"], ("phone_position",))
+
+
+def test_a_window_feature_without_a_detector_class_is_calibrated_alone_beside_a_stacked_one(stacked, detector_file):
+    from isu_validate.reference.backbone import Backbone
+    from isu_validate.reference.windows import WindowSettings, fit_window_heads
+    from isu_validate.render.outputs import channel_paths
+    folder, _ = stacked
+    images = sorted((folder / "work" / "train").glob("*.png"))
+    scenes = [json.loads(p.with_suffix(".json").read_text())["scene"] for p in images]
+    labels = [json.loads(channel_paths(p)["label"].read_text()) for p in images]
+    for scene in scenes:      # the painter draws no belt: give every scene a belt box so that both heads fit
+        scene["seat_belt"] = "YES" if scene["phone_position"] == "NONE" else "NO"
+    for label in labels:
+        label["visible"]["seat_belt"] = {"bbox": [0, 0, 40, 40]}
+    detector = FrameDetector.open(detector_file, {"phone_position": "cell phone"})
+    assert detector.log_odds(read_rgb(images[0]), ["seat_belt"]) == {}     # nothing to read for the belt
+    backbone = Backbone(160, 120, threads=2)
+    both = WindowSettings(("seat_belt", "phone_position"), SMALL.height)
+    heads, stackings, _, read = fit_window_heads(SPACE, both, backbone, images, scenes, labels, 3, detector)
+    assert [h.feature for h in heads] == ["seat_belt", "phone_position"]
+    assert stackings["seat_belt"].detector == 0.0 and isinstance(stackings["seat_belt"].describe(), list)
+    assert stackings["phone_position"].detector > 0
+    # the phone's stacking is the one fitted without the belt beside it
+    alone = fit_window_heads(SPACE, SMALL, backbone, images, scenes, labels, 3, detector)[1]["phone_position"]
+    assert stackings["phone_position"].window == pytest.approx(alone.window, rel=1e-6)
+    assert stackings["phone_position"].detector == pytest.approx(alone.detector, rel=1e-6)
+    assert all(set(frame) == {"seat_belt", "phone_position"} for frame in read)
 
 
 def test_logits_of_sure_scores_stay_finite_and_folds_are_balanced_and_seeded():

@@ -55,7 +55,7 @@ def register(sub) -> None:
                             "in a whole frame); 1 the whole frame only (default 2)")
     train.add_argument("--detector-class", action="append", metavar="FEATURE=CLASS",
                        help="the detector class a window feature reads (default phone_position='cell phone'); "
-                            "repeat for more")
+                            "repeat for more; a window feature without one is calibrated alone")
     train.add_argument("--extra", nargs="+", type=Path, metavar="DATASET",
                        help="retrain on the --base model's own training scenes (its stored features: nothing is "
                             "rendered again) plus these datasets (`isu-validate dataset`); the card compares every "

@@ -258,7 +258,11 @@ class FrameDetector:
         return cls(detector, dict(classes), tiles)
 
     def log_odds(self, rgb: np.ndarray, features: list[str]) -> dict[str, float]:
-        """{feature: the detector's best score for its class over the frame's views, as log-odds} for one RGB frame."""
+        """{feature: the detector's best score for its class over the frame's views, as log-odds} for one RGB frame
+        (only the features it has a class for)."""
+        features = [f for f in features if f in self.classes]   # the others are calibrated alone
+        if not features:
+            return {}
         names = sorted({self.classes[f] for f in features})
         best = {name: 0.0 for name in names}
         for view in views(rgb, self.tiles):
@@ -357,8 +361,9 @@ def _first_line(exc: Exception) -> str:
 
 
 def parse_classes(pairs: list[str] | None, features: tuple[str, ...]) -> dict[str, str]:
-    """``FEATURE=CLASS`` pairs over the defaults, one class per window feature (each checked by the caller against
-    the detector's names)."""
+    """``FEATURE=CLASS`` pairs over the defaults: the window features the detector stacks (each class checked by the
+    caller against the detector's names). A window feature without a class (a seat belt: COCO has none) is
+    calibrated alone."""
     classes = {f: DEFAULT_CLASSES[f] for f in features if f in DEFAULT_CLASSES}
     for pair in pairs or []:
         feature, sep, name = pair.partition("=")
@@ -368,10 +373,9 @@ def parse_classes(pairs: list[str] | None, features: tuple[str, ...]) -> dict[st
             raise InputError(f"--detector-class {pair!r}: {feature.strip()!r} has no window head; "
                              f"window features: {', '.join(features)}")
         classes[feature.strip()] = name.strip()
-    missing = [f for f in features if f not in classes]
-    if missing:
-        raise InputError(f"--detector: no detector class for {', '.join(missing)}; name one with "
-                         f"--detector-class {missing[0]}=CLASS")
+    if not classes:   # a feature without a class is calibrated alone, but a detector that stacks none is a slip
+        raise InputError(f"--detector: no window feature has a detector class ({', '.join(features)}); name one "
+                         f"with --detector-class {features[0]}=CLASS")
     return classes
 
 

@@ -149,8 +149,9 @@ def fit_window_heads(space, settings: WindowSettings, backbone: Backbone, images
               for name, rows in examples.items()}
     heads = [_fit_windows_of(name, rows, seed) for name, rows in examples.items()]
     fold_of = folds(len(images), seed)
+    stacked = {name for name in examples if detector and name in detector.classes}   # the others: calibrated alone
     fold_heads = {name: [_fit_windows_of(name, [e for e in rows if fold_of[e[0]] != k], seed) for k in range(FOLDS)]
-                  for name, rows in examples.items()} if detector else {}
+                  for name, rows in examples.items() if name in stacked}
     # a second pass over the frames: the calibration needs the fitted heads, and keeping every frame's map from the
     # first pass would hold about 1 MB a frame (600 MB for 600 renders) to save a minute
     read_frames = [_read_training_frame(settings, backbone, heads, fold_heads, fold_of[i], image, scene, detector)
@@ -162,9 +163,9 @@ def fit_window_heads(space, settings: WindowSettings, backbone: Backbone, images
         rows = [i for i, frame in enumerate(read_frames) if name in frame]
         truth = np.array([feature.truth(scenes[i][name]) == "YES" for i in rows])
         # stacked with a detector, the window's log-odds are out of fold (stacking.py); alone, as fitted
-        window = np.array([read_frames[i][name].out_of_fold if detector else read_frames[i][name].window
+        window = np.array([read_frames[i][name].out_of_fold if name in stacked else read_frames[i][name].window
                            for i in rows])
-        seen = np.array([read_frames[i][name].detector for i in rows]) if detector else None
+        seen = np.array([read_frames[i][name].detector for i in rows]) if name in stacked else None
         stackings[name] = fit_stacking(name, window, seen, truth)
         for i in rows:
             frame = read_frames[i][name]
@@ -200,7 +201,8 @@ def _read_training_frame(settings: WindowSettings, backbone: Backbone, heads: li
     flat = _flat(settings.maps(backbone, rgb))
     seen = detector.log_odds(rgb, [h.feature for h in asked]) if detector else {}
     return {h.feature: TrainingRead(_best_log_odds(h, flat),
-                                    _best_log_odds(fold_heads[h.feature][fold], flat) if fold_heads else None,
+                                    _best_log_odds(fold_heads[h.feature][fold], flat) if h.feature in fold_heads
+                                    else None,
                                     seen.get(h.feature, 0.0)) for h in asked}
 
 
