@@ -444,7 +444,7 @@ def _detector_lines(detector: dict | None) -> list[str]:
     classes = ", ".join(f"`{f}` <- '{c}'" for f, c in detector["classes"].items())
     views = "the frame and its 2x2 tiles" if detector.get("tiles", 1) == 2 else "the whole frame"
     return [f"- Detector: the window heads it has a class for are stacked with an object detector's best score "
-            f"({classes}; the others are calibrated alone; "
+            f"({classes}; any other window head is calibrated alone; "
             f"`{detector['file']}`, sha256 {detector['sha256'][:12]}, input {detector['input']} px, over {views}), "
             "the stacking "
             "fitted on the training renders with the window's log-odds out of fold. The detector was trained by its "

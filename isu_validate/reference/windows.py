@@ -186,7 +186,7 @@ def _fit_windows_of(name: str, rows: list[tuple[int, np.ndarray, str]], seed: in
 class TrainingRead(NamedTuple):
     """One training frame's log-odds of one feature."""
     window: float                 # the best window's, by the head fitted on every frame
-    out_of_fold: float | None     # the best window's, by the head fitted without the frame's fold (with a detector)
+    out_of_fold: float | None     # the best window's, by the head fitted without the frame's fold (if stacked)
     detector: float               # the detector's (0 without one)
 
 
