@@ -20,7 +20,7 @@ from isu_validate.reference.model import ReferenceISU
 from isu_validate.reference.stacking import FOLDS, Stacking, folds
 from isu_validate.space import load_space
 from tests.test_reference import train_painted
-from tests.test_reference_windows import SMALL, PhonePainter
+from tests.test_reference_windows import SMALL, PhonePainter, belted_training_frames
 
 SPACE = load_space()
 SIDE = 64          # the stand-in's input square
@@ -186,15 +186,7 @@ def test_detector_classes_default_for_the_phone_and_are_named_for_the_rest():
 def test_a_window_feature_without_a_detector_class_is_calibrated_alone_beside_a_stacked_one(stacked, detector_file):
     from isu_validate.reference.backbone import Backbone
     from isu_validate.reference.windows import WindowSettings, fit_window_heads
-    from isu_validate.render.outputs import channel_paths
-    folder, _ = stacked
-    images = sorted((folder / "work" / "train").glob("*.png"))
-    scenes = [json.loads(p.with_suffix(".json").read_text())["scene"] for p in images]
-    labels = [json.loads(channel_paths(p)["label"].read_text()) for p in images]
-    for scene in scenes:      # the painter draws no belt: give every scene a belt box so that both heads fit
-        scene["seat_belt"] = "YES" if scene["phone_position"] == "NONE" else "NO"
-    for label in labels:
-        label["visible"]["seat_belt"] = {"bbox": [0, 0, 40, 40]}
+    images, scenes, labels = belted_training_frames(stacked[0])
     detector = FrameDetector.open(detector_file, {"phone_position": "cell phone"})
     assert detector.log_odds(read_rgb(images[0]), ["seat_belt"]) == {}     # nothing to read for the belt
     backbone = Backbone(160, 120, threads=2)

@@ -226,16 +226,22 @@ def test_the_reproduce_line_names_the_space_and_rigs_a_model_was_trained_in():
     assert line.startswith("- Reproduce: `isu-validate reference train --n 300 ")
 
 
-def test_a_features_window_head_does_not_change_with_the_other_features_asked_for(windowed, tmp_path):
-    from isu_validate.reference.windows import fit_window_heads
-    folder, _ = windowed
+def belted_training_frames(folder):
+    """A painted model's training frames as ``fit_window_heads`` takes them (images, scenes, labels), each scene
+    given a belt answer and a belt box: the painter draws no belt, and a second window feature needs both."""
     images = sorted((folder / "work" / "train").glob("*.png"))
     scenes = [json.loads(p.with_suffix(".json").read_text())["scene"] for p in images]
     labels = [json.loads(channel_paths(p)["label"].read_text()) for p in images]
-    for scene in scenes:      # the painter draws no belt: give every scene a belt box so that both heads fit
+    for scene in scenes:
         scene["seat_belt"] = "YES" if scene["phone_position"] == "NONE" else "NO"
     for label in labels:
         label["visible"]["seat_belt"] = {"bbox": [0, 0, 40, 40]}
+    return images, scenes, labels
+
+
+def test_a_features_window_head_does_not_change_with_the_other_features_asked_for(windowed, tmp_path):
+    from isu_validate.reference.windows import fit_window_heads
+    images, scenes, labels = belted_training_frames(windowed[0])
     backbone = Backbone(160, 120, threads=2)
     alone = fit_window_heads(SPACE, SMALL, backbone, images, scenes, labels, seed=3)[0][0]
     both = WindowSettings(("seat_belt", "phone_position"), SMALL.height)
