@@ -17,7 +17,7 @@ from isu_validate.reference.backbone import read_rgb
 from isu_validate.reference.detector import (DETECTOR_FILE, DarknetYolo, FrameDetector, OnnxYolo, digest_of, logit,
                                             open_detector, open_in_model, parse_classes, views)
 from isu_validate.reference.model import ReferenceISU
-from isu_validate.reference.stacking import FOLDS, Stacking, folds
+from isu_validate.reference.stacking import FOLDS, Folds, Stacking, folds
 from isu_validate.space import load_space
 from tests.test_reference import train_painted
 from tests.test_reference_windows import SMALL, PhonePainter, belted_training_frames
@@ -107,6 +107,9 @@ def test_window_heads_stacked_with_the_detector_answer_as_the_card_says(stacked,
     assert card["held_out"]["per_feature"]["phone_position"]["accuracy"] >= 0.9
     text = (model / "MODEL_CARD.md").read_text()
     assert "- Detector: the window heads it has a class for are stacked with an object detector" in text
+    # renders from one viewpoint: the stacking's folds are by frame, and both records say so
+    assert meta["windows"]["stacking_folds"] == card["windows"]["stacking_folds"] == f"{FOLDS} by frame"
+    assert f"log-odds out of fold (folds {FOLDS} by frame)" in text
     assert "its licence: test stand-in, no licence" in text
     assert f"--detector {detector_file} --detector-tiles 2 --detector-class phone_position='cell phone'" in text
     assert about["tiles"] == 2 and "over the frame and its 2x2 tiles" in text
@@ -207,6 +210,33 @@ def test_logits_of_sure_scores_stay_finite_and_folds_are_balanced_and_seeded():
     a = folds(23, seed=4)
     assert np.array_equal(a, folds(23, seed=4)) and not np.array_equal(a, folds(23, seed=5))
     assert sorted(np.bincount(a, minlength=FOLDS)) == [4, 4, 5, 5, 5]
+
+
+def test_the_stacking_folds_are_the_viewpoints_when_the_renders_have_several():
+    by_view = Folds.plan(["side", "door", "side", "mirror", "door"], seed=4)
+    assert by_view.viewpoints == ("door", "mirror", "side") and len(by_view) == 3
+    assert by_view.of.tolist() == [2, 0, 2, 1, 0] and by_view.describe() == "by viewpoint: door, mirror, side"
+    # one viewpoint, or a frame that names none (a label without its camera): FOLDS by frame, as before
+    for viewpoints in (["side"] * 23, ["side"] * 22 + [None]):
+        plan = Folds.plan(viewpoints, seed=4)
+        assert plan.viewpoints == () and len(plan) == FOLDS and np.array_equal(plan.of, folds(23, seed=4))
+        assert plan.describe() == f"{FOLDS} by frame"
+
+
+def test_a_stacking_fitted_on_two_viewpoints_leaves_each_out_in_turn(stacked, detector_file):
+    from isu_validate.reference.backbone import Backbone
+    from isu_validate.reference.windows import fit_window_heads
+    images, scenes, labels = belted_training_frames(stacked[0])
+    for i, label in enumerate(labels):
+        label["camera"] = {"name": ("side", "door")[i % 2]}
+    detector = FrameDetector.open(detector_file, {"phone_position": "cell phone"})
+    backbone = Backbone(160, 120, threads=2)
+    by_view = fit_window_heads(SPACE, SMALL, backbone, images, scenes, labels, 3, detector)
+    by_frame = fit_window_heads(SPACE, SMALL, backbone, images, scenes, labels, 3, detector,
+                                Folds(folds(len(images), 3)))
+    # the labels' viewpoints decide the folds: the heads are the same either way, only the stacking moves
+    assert by_view[1]["phone_position"] != by_frame[1]["phone_position"]
+    assert np.allclose(by_view[0][0].weight, by_frame[0][0].weight, atol=1e-8)
 
 
 def test_a_stored_calibration_reads_as_a_stacking_either_way():

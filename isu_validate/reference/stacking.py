@@ -61,3 +61,28 @@ def fit_stacking(feature: str, window: np.ndarray, detector: np.ndarray | None, 
 def folds(n: int, seed: int) -> np.ndarray:
     """Each training frame's fold (0..FOLDS-1), balanced in size and drawn from its own seeded stream."""
     return np.random.default_rng([seed, FOLDS]).permutation(n) % FOLDS
+
+
+@dataclass(frozen=True)
+class Folds:
+    """The stacking's folds: each training frame's fold, and the viewpoint each fold is (() when folds are by
+    frame)."""
+    of: np.ndarray
+    viewpoints: tuple[str, ...] = ()
+
+    @classmethod
+    def plan(cls, viewpoints: list[str | None], seed: int) -> "Folds":
+        """By viewpoint when every frame names one and there are two or more; else ``FOLDS`` by frame."""
+        names = sorted({v for v in viewpoints if v})
+        if len(names) >= 2 and all(viewpoints):
+            return cls(np.array([names.index(v) for v in viewpoints]), tuple(names))
+        return cls(folds(len(viewpoints), seed))
+
+    def __len__(self) -> int:
+        return len(self.viewpoints) or FOLDS
+
+    def describe(self) -> str:
+        """As the card and heads.json record it."""
+        if self.viewpoints:
+            return "by viewpoint: " + ", ".join(self.viewpoints)
+        return f"{FOLDS} by frame"

@@ -27,7 +27,8 @@ from .feature_bank import FILES, FeatureSet, save_bank
 from .fine_tune import WEIGHTS_FILE, FineTune, fine_tune_backbone, save_tuned
 from .heads import CLIP_SIGMA, REGULARISATION_C, Head, fit_head, save_heads
 from .detector import FrameDetector
-from .windows import WindowSettings, fit_window_heads, frame_probabilities, save_held_out
+from .stacking import Folds
+from .windows import WindowSettings, fit_window_heads, frame_probabilities, save_held_out, viewpoint
 from ..errors import InputError
 
 
@@ -237,12 +238,14 @@ def _fit_windows(space: SceneSpace, settings: WindowSettings, backbone: Backbone
     from ..render.outputs import read_label
 
     started = time.time()
+    labels = [read_label(e.image) for e in train]
+    plan = Folds.plan([viewpoint(label) for label in labels], seed)
     heads, calibration, counts, training_read = fit_window_heads(
-        space, settings, backbone, [e.image for e in train], [e.scene for e in train],
-        [read_label(e.image) for e in train], seed, detector)
+        space, settings, backbone, [e.image for e in train], [e.scene for e in train], labels, seed, detector, plan)
     whole = card["held_out_by_preset"]
     card["windows"] = {**settings.describe(), "calibration": {n: c.describe() for n, c in calibration.items()},
-                       **({"detector": detector.describe()} if detector else {}), "training_windows": counts,
+                       **({"detector": detector.describe(), "stacking_folds": plan.describe()} if detector else {}),
+                       "training_windows": counts,
                        "whole_frame_held_out": {n: whole[card["render_preset"]]["per_feature"].get(n)
                                                 for n in settings.features}}
     card["training"].update(answer_accuracy(space, _answers(training_read), [e.scene for e in train])["per_feature"])
@@ -311,8 +314,8 @@ def write_model(out: Path, heads: list[Head], card: dict, bank: list[FeatureSet]
     names the file)."""
     meta = {k: card[k] for k in ("backbone", "input_size", "space", "space_hash", "seed")}
     if window_heads:
-        meta["windows"] = {k: card["windows"][k] for k in ("features", "height", "cells", "calibration", "detector")
-                           if k in card["windows"]}
+        kept = ("features", "height", "cells", "calibration", "detector", "stacking_folds")
+        meta["windows"] = {k: card["windows"][k] for k in kept if k in card["windows"]}
     if detector is not None:   # the model folder carries its detector, as it carries a tuned backbone
         detector.detector.copy_into(out)
     if backbone is not None and backbone.tuned_blocks:
@@ -435,10 +438,11 @@ def _window_lines(windows: dict | None) -> list[str]:
             f"{windows['cells']}x{windows['cells']}-cell window of the backbone's map of the frame scaled to {h} px "
             f"high, its aspect kept (trained on the render labels' part boxes; windows: {counts}); their rows below "
             "are the window heads'. "
-            f"The whole-frame heads' held-out accuracy: {before or '-'}", *_detector_lines(windows.get("detector"))]
+            f"The whole-frame heads' held-out accuracy: {before or '-'}",
+            *_detector_lines(windows.get("detector"), windows.get("stacking_folds", "5 by frame"))]
 
 
-def _detector_lines(detector: dict | None) -> list[str]:
+def _detector_lines(detector: dict | None, stacking_folds: str) -> list[str]:
     if not detector:
         return []
     classes = ", ".join(f"`{f}` <- '{c}'" for f, c in detector["classes"].items())
@@ -447,7 +451,8 @@ def _detector_lines(detector: dict | None) -> list[str]:
             f"({classes}; any other window head is calibrated alone; "
             f"`{detector['file']}`, sha256 {detector['sha256'][:12]}, input {detector['input']} px, over {views}), "
             "the stacking "
-            "fitted on the training renders with the window's log-odds out of fold. The detector was trained by its "
+            f"fitted on the training renders with the window's log-odds out of fold (folds {stacking_folds}). "
+            "The detector was trained by its "
             f"makers on their own data (for a COCO detector, photographs), not by this project; its licence: "
             f"{detector['licence']}"]
 

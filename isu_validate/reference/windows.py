@@ -30,7 +30,7 @@ from ..progress import tracked
 from .backbone import CELL_PX, Backbone, read_rgb
 from .detector import FrameDetector
 from .heads import Head, fit_head
-from .stacking import FOLDS, Stacking, fit_stacking, folds
+from .stacking import Folds, Stacking, fit_stacking
 
 HEIGHT = 480         # every frame is read this many pixels high, its aspect kept (a render's own height)
 CELLS = 3            # a window is CELLS x CELLS cells of the last map
@@ -118,13 +118,19 @@ def _overlaps(a, b) -> bool:
     return not (a[2] <= b[0] or a[0] >= b[2] or a[3] <= b[1] or a[1] >= b[3])
 
 
+def viewpoint(label: dict | None) -> str | None:
+    """The camera rig a render was seen through (its label's camera name; jittered frames keep their rig's)."""
+    return ((label or {}).get("camera") or {}).get("name")
+
+
 def fit_window_heads(space, settings: WindowSettings, backbone: Backbone, images: list[Path], scenes: list[dict],
-                     labels: list[dict | None], seed: int, detector: FrameDetector | None = None
-                     ) -> tuple[list[Head], dict[str, Stacking], dict, list[dict]]:
+                     labels: list[dict | None], seed: int, detector: FrameDetector | None = None,
+                     fold_plan: Folds | None = None) -> tuple[list[Head], dict[str, Stacking], dict, list[dict]]:
     """One window head per feature of ``settings`` from the training renders (``scenes``: their labels less what
     the frame hid; ``labels``: their render labels, the boxes), and how a frame's best window makes its probability:
-    calibrated alone, or stacked with ``detector`` (``stacking.py``); (heads, stackings, how many windows each learnt
-    from, the class probabilities per training frame: {} where not asked).
+    calibrated alone, or stacked with ``detector`` (``stacking.py``, out of the folds of ``fold_plan``, by default
+    ``Folds.plan`` of the labels' viewpoints); (heads, stackings, how many windows each learnt from, the class
+    probabilities per training frame: {} where not asked).
 
     The calibration: a frame's best window is the most positive of some 200, so its raw probability says YES to
     frames without the thing far more often than one window would. A logistic fit of the training frames' answers
@@ -148,9 +154,10 @@ def fit_window_heads(space, settings: WindowSettings, backbone: Backbone, images
     counts = {name: {answer: sum(e[2] == answer for e in rows) for answer in ("YES", "NO")}
               for name, rows in examples.items()}
     heads = [_fit_windows_of(name, rows, seed) for name, rows in examples.items()]
-    fold_of = folds(len(images), seed)
+    plan = fold_plan or Folds.plan([viewpoint(label) for label in labels], seed)
+    fold_of = plan.of
     stacked = {name for name in examples if detector and name in detector.classes}   # the others: calibrated alone
-    fold_heads = {name: [_fit_windows_of(name, [e for e in rows if fold_of[e[0]] != k], seed) for k in range(FOLDS)]
+    fold_heads = {name: [_fit_windows_of(name, [e for e in rows if fold_of[e[0]] != k], seed) for k in range(len(plan))]
                   for name, rows in examples.items() if name in stacked}
     # a second pass over the frames: the calibration needs the fitted heads, and keeping every frame's map from the
     # first pass would hold about 1 MB a frame (600 MB for 600 renders) to save a minute
@@ -177,9 +184,9 @@ def _fit_windows_of(name: str, rows: list[tuple[int, np.ndarray, str]], seed: in
     answers = [e[2] for e in rows]
     yes, no = answers.count("YES"), answers.count("NO")
     if not yes or not no:
-        raise InputError(f"--windows {name}: the training renders (or, with --detector, a fifth of them left out to "
-                         f"stack it) give {yes} windows that show it and {no} that do not; both are needed: "
-                         "use a larger --n")
+        raise InputError(f"--windows {name}: the training renders (or, with --detector, those left when a fold, a "
+                         f"fifth of them or one viewpoint's, is left out to stack it) give {yes} windows that show it "
+                         f"and {no} that do not; both are needed: use a larger --n")
     return fit_head(name, np.stack([e[1] for e in rows]), answers, seed=seed)
 
 
