@@ -273,7 +273,7 @@ def test_the_zero_shot_crops_tile_the_frame_in_halves_and_thirds():
 
 def test_the_zero_shot_auc_says_which_frames_show_the_thing(tmp_path, monkeypatch):
     from isu_validate.transfer.ask import Item
-    from isu_validate.transfer.zero_shot import zero_shot_scores
+    from isu_validate.transfer.zero_shot import format_zero_shot, zero_shot_scores
 
     class Brightness:   # stands in for the classifier: the brighter the frame, the more "phone"
         def __init__(self, device):
@@ -283,7 +283,15 @@ def test_the_zero_shot_auc_says_which_frames_show_the_thing(tmp_path, monkeypatc
             assert obj == "phone"
             return float(rgb.mean())
 
+    class Darkness:     # stands in for the detector: the darker the frame, the surer "cell phone"
+        classes = {"phone_position": "cell phone"}
+
+        def log_odds(self, rgb, features):
+            assert features == ["phone_position"]
+            return {"phone_position": 10.0 - float(rgb.mean()) / 10}
+
     monkeypatch.setattr("isu_validate.recognition.objects.ObjectRecogniser", Brightness)
+    monkeypatch.setattr("isu_validate.reference.detector.FrameDetector.open", lambda spec, classes: Darkness())
     frames = {}
     for level in (10, 20, 200, 210):
         frames[level] = tmp_path / f"{level}.png"
@@ -300,6 +308,21 @@ def test_the_zero_shot_auc_says_which_frames_show_the_thing(tmp_path, monkeypatc
     assert out["shows"]["phone_position"]["median_positive"] == pytest.approx(205.0)
     assert set(out["shows"]) == {"phone_position"}       # no object stands for a seat belt: not scored
     assert zero_shot_scores({"x": items((200,), (10,))}, SPACE, ["seat_belt"], "cpu") == {}
+    # the detector's own scores on the same frames, beside the classifier's
+    seen = out["shows"]["phone_position"]["detector"]
+    assert seen["name"] == "yolov4-tiny" and seen["class"] == "cell phone" and seen["auc"] == 0.0
+    assert out["backwards"]["phone_position"]["detector"]["auc"] == 1.0
+    assert seen["median_positive"] == pytest.approx(np.mean([1 / (1 + np.exp(z)) for z in (10.0, 11.0)]))
+    # not installed: the classifier's score stands, and the summary and the printed line say why
+    def missing(spec, classes):
+        raise InputError("the built-in detector yolov4-tiny is not installed; run make setup")
+    monkeypatch.setattr("isu_validate.reference.detector.FrameDetector.open", missing)
+    out = zero_shot_scores({"shows": items((200, 210), (10, 20))}, SPACE, ["phone_position"], "cpu")
+    assert out["shows"]["phone_position"]["auc"] == 1.0
+    assert out["shows"]["phone_position"]["detector"] == {
+        "name": "yolov4-tiny", "unavailable": "the built-in detector yolov4-tiny is not installed; run make setup"}
+    assert format_zero_shot(out)[1] == ("zero-shot detector yolov4-tiny, shows, phone_position: not read (the "
+                                        "built-in detector yolov4-tiny is not installed; run make setup)")
 
 
 def test_transfer_zero_shot_scores_the_real_photos_with_the_real_classifier(class_set, tmp_path, capsys,
@@ -313,11 +336,17 @@ def test_transfer_zero_shot_scores_the_real_photos_with_the_real_classifier(clas
     printed = capsys.readouterr().out
     assert "zero-shot phone anywhere (ImageNet classes, no training), set, phone_position: AUC" in printed
     assert "(n 3 with, 3 without, 1 unreadable)" in printed
+    # and the built-in detector, read as a window model reads it
+    assert "zero-shot detector yolov4-tiny 'cell phone' (COCO photos, no training from renders), set, " \
+           "phone_position: AUC" in printed
     summary = json.loads((out / "summary.json").read_text())
     row = summary["zero_shot"]["set"]["phone_position"]
     assert (row["n_positive"], row["n_negative"], row["unreadable"]) == (3, 3, 1) and 0.0 <= row["auc"] <= 1.0
     assert 0.0 <= row["median_positive"] <= 1.0 and summary["settings"]["zero_shot"] is True
-    assert "Does the object read as itself? (zero-shot, no training)" in (out / "report.html").read_text()
+    seen = row["detector"]
+    assert seen["class"] == "cell phone" and 0.0 <= seen["auc"] <= 1.0 and 0.0 <= seen["median_negative"] <= 1.0
+    report = (out / "report.html").read_text()
+    assert "Does the object read as itself? (zero-shot, no training)" in report and "cell phone (yolov4-tiny)" in report
 
 
 def test_transfer_escapes_what_the_labels_and_sut_said(tmp_path, few_torch_threads):

@@ -229,7 +229,9 @@ def _headline(summary: dict) -> dict:
         "renders": {f: sc["balanced_accuracy"] for f, sc in (summary.get("renders") or {}).get("scores", {}).items()},
         "kid": {name: r["kid_mean"] for name, r in (summary.get("realism") or {}).items()},
         "zero_shot_auc": {name: {f: r["auc"] for f, r in features.items()}
-                          for name, features in (summary.get("zero_shot") or {}).items()}}
+                          for name, features in (summary.get("zero_shot") or {}).items()},
+        "detector_alone_auc": {name: {f: r["detector"].get("auc") for f, r in features.items() if r.get("detector")}
+                               for name, features in (summary.get("zero_shot") or {}).items()}}
 
 
 def format_table(rows: list[dict]) -> str:

@@ -26,7 +26,8 @@ def add_real_set_arguments(p) -> None:
                    help="also score every photo and render for the object a YES shows (phone in hand: a phone) with "
                         "ImageNet classes over 25 crops, no training: its AUC on the photos beside the renders' says "
                         "whether the rendered object reads as the real one (25 classifier passes a frame: 1.1 s on "
-                        "one CPU thread, 0.7 s on two)")
+                        "one CPU thread, 0.7 s on two); where the built-in COCO detector has the object's class "
+                        "(phone: 'cell phone'), its score too: what a detector alone does, nothing learnt from renders")
     add_device_argument(p)
 
 
