@@ -27,7 +27,7 @@ from .feature_bank import FILES, FeatureSet, save_bank
 from .fine_tune import WEIGHTS_FILE, FineTune, fine_tune_backbone, save_tuned
 from .heads import CLIP_SIGMA, REGULARISATION_C, Head, fit_head, save_heads
 from .detector import FrameDetector
-from .stacking import Folds
+from .stacking import FOLDS, Folds
 from .windows import WindowSettings, fit_window_heads, frame_probabilities, save_held_out, viewpoint
 from ..errors import InputError
 
@@ -439,7 +439,7 @@ def _window_lines(windows: dict | None) -> list[str]:
             f"high, its aspect kept (trained on the render labels' part boxes; windows: {counts}); their rows below "
             "are the window heads'. "
             f"The whole-frame heads' held-out accuracy: {before or '-'}",
-            *_detector_lines(windows.get("detector"), windows.get("stacking_folds", "5 by frame"))]
+            *_detector_lines(windows.get("detector"), windows.get("stacking_folds", f"{FOLDS} by frame"))]
 
 
 def _detector_lines(detector: dict | None, stacking_folds: str) -> list[str]:

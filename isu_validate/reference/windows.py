@@ -154,7 +154,7 @@ def fit_window_heads(space, settings: WindowSettings, backbone: Backbone, images
     counts = {name: {answer: sum(e[2] == answer for e in rows) for answer in ("YES", "NO")}
               for name, rows in examples.items()}
     heads = [_fit_windows_of(name, rows, seed) for name, rows in examples.items()]
-    plan = fold_plan or Folds.plan([viewpoint(label) for label in labels], seed)
+    plan = fold_plan if fold_plan is not None else Folds.plan([viewpoint(label) for label in labels], seed)
     fold_of = plan.of
     stacked = {name for name in examples if detector and name in detector.classes}   # the others: calibrated alone
     fold_heads = {name: [_fit_windows_of(name, [e for e in rows if fold_of[e[0]] != k], seed) for k in range(len(plan))]
