@@ -63,7 +63,7 @@ def folds(n: int, seed: int) -> np.ndarray:
     return np.random.default_rng([seed, FOLDS]).permutation(n) % FOLDS
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)   # it holds an array: no field-by-field ==
 class Folds:
     """The stacking's folds: each training frame's fold, and the viewpoint each fold is (() when folds are by
     frame)."""

@@ -27,8 +27,8 @@ from .feature_bank import FILES, FeatureSet, save_bank
 from .fine_tune import WEIGHTS_FILE, FineTune, fine_tune_backbone, save_tuned
 from .heads import CLIP_SIGMA, REGULARISATION_C, Head, fit_head, save_heads
 from .detector import FrameDetector
-from .stacking import FOLDS, Folds
-from .windows import WindowSettings, fit_window_heads, frame_probabilities, save_held_out, viewpoint
+from .stacking import FOLDS
+from .windows import WindowSettings, fit_window_heads, frame_probabilities, save_held_out, stacking_folds
 from ..errors import InputError
 
 
@@ -239,7 +239,7 @@ def _fit_windows(space: SceneSpace, settings: WindowSettings, backbone: Backbone
 
     started = time.time()
     labels = [read_label(e.image) for e in train]
-    plan = Folds.plan([viewpoint(label) for label in labels], seed)
+    plan = stacking_folds(labels, seed)
     heads, calibration, counts, training_read = fit_window_heads(
         space, settings, backbone, [e.image for e in train], [e.scene for e in train], labels, seed, detector, plan)
     whole = card["held_out_by_preset"]

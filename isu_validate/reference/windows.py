@@ -118,9 +118,10 @@ def _overlaps(a, b) -> bool:
     return not (a[2] <= b[0] or a[0] >= b[2] or a[3] <= b[1] or a[1] >= b[3])
 
 
-def viewpoint(label: dict | None) -> str | None:
-    """The camera rig a render was seen through (its label's camera name; jittered frames keep their rig's)."""
-    return ((label or {}).get("camera") or {}).get("name")
+def stacking_folds(labels: list[dict | None], seed: int) -> Folds:
+    """The stacking's folds for training renders with these labels: by the camera rig each was seen through (its
+    label's camera name; jittered frames keep their rig's) when there are several (``Folds.plan``)."""
+    return Folds.plan([((label or {}).get("camera") or {}).get("name") for label in labels], seed)
 
 
 def fit_window_heads(space, settings: WindowSettings, backbone: Backbone, images: list[Path], scenes: list[dict],
@@ -129,7 +130,7 @@ def fit_window_heads(space, settings: WindowSettings, backbone: Backbone, images
     """One window head per feature of ``settings`` from the training renders (``scenes``: their labels less what
     the frame hid; ``labels``: their render labels, the boxes), and how a frame's best window makes its probability:
     calibrated alone, or stacked with ``detector`` (``stacking.py``, out of the folds of ``fold_plan``, by default
-    ``Folds.plan`` of the labels' viewpoints); (heads, stackings, how many windows each learnt from, the class
+    ``stacking_folds`` of the labels); (heads, stackings, how many windows each learnt from, the class
     probabilities per training frame: {} where not asked).
 
     The calibration: a frame's best window is the most positive of some 200, so its raw probability says YES to
@@ -154,7 +155,7 @@ def fit_window_heads(space, settings: WindowSettings, backbone: Backbone, images
     counts = {name: {answer: sum(e[2] == answer for e in rows) for answer in ("YES", "NO")}
               for name, rows in examples.items()}
     heads = [_fit_windows_of(name, rows, seed) for name, rows in examples.items()]
-    plan = fold_plan if fold_plan is not None else Folds.plan([viewpoint(label) for label in labels], seed)
+    plan = fold_plan if fold_plan is not None else stacking_folds(labels, seed)
     fold_of = plan.of
     stacked = {name for name in examples if detector and name in detector.classes}   # the others: calibrated alone
     fold_heads = {name: [_fit_windows_of(name, [e for e in rows if fold_of[e[0]] != k], seed) for k in range(len(plan))]
