@@ -108,7 +108,7 @@ def test_window_heads_stacked_with_the_detector_answer_as_the_card_says(stacked,
     text = (model / "MODEL_CARD.md").read_text()
     assert "- Detector: the window heads it has a class for are stacked with an object detector" in text
     # renders from one viewpoint: the stacking's folds are by frame, and both records say so
-    assert meta["windows"]["stacking_folds"] == card["windows"]["stacking_folds"] == f"{FOLDS} by frame"
+    assert meta["windows"]["calibration_folds"] == card["windows"]["calibration_folds"] == f"{FOLDS} by frame"
     assert f"log-odds out of fold (folds {FOLDS} by frame)" in text
     assert "its licence: test stand-in, no licence" in text
     assert f"--detector {detector_file} --detector-tiles 2 --detector-class phone_position='cell phone'" in text
@@ -237,6 +237,20 @@ def test_a_stacking_fitted_on_two_viewpoints_leaves_each_out_in_turn(stacked, de
     # the labels' viewpoints decide the folds: the heads are the same either way, only the stacking moves
     assert by_view[1]["phone_position"] != by_frame[1]["phone_position"]
     assert np.allclose(by_view[0][0].weight, by_frame[0][0].weight, atol=1e-8)
+
+
+def test_a_window_head_calibrated_alone_is_calibrated_out_of_fold(stacked):
+    from isu_validate.reference.backbone import Backbone
+    from isu_validate.reference.windows import WindowSettings, fit_window_heads
+    images, scenes, labels = belted_training_frames(stacked[0])
+    belt = WindowSettings(("seat_belt",), SMALL.height)
+    backbone = Backbone(160, 120, threads=2)
+    one = fit_window_heads(SPACE, belt, backbone, images, scenes, labels, 3)
+    other = fit_window_heads(SPACE, belt, backbone, images, scenes, labels, 3, fold_plan=Folds(folds(len(images), 4)))
+    # the same head, calibrated on other folds: a calibration in sample would not move with them
+    assert np.allclose(one[0][0].weight, other[0][0].weight, atol=1e-8)
+    assert one[1]["seat_belt"].detector == other[1]["seat_belt"].detector == 0.0
+    assert one[1]["seat_belt"] != other[1]["seat_belt"]
 
 
 def test_a_stored_calibration_reads_as_a_stacking_either_way():

@@ -72,6 +72,9 @@ def test_window_heads_answer_their_feature_and_the_card_keeps_the_whole_frame_fi
     assert whole == pytest.approx(own["accuracy"])
     text = (model / "MODEL_CARD.md").read_text()
     assert "--windows phone_position" in text and "Window heads: `phone_position`" in text
+    # calibrated out of fold, as the card says (one viewpoint: five folds by frame)
+    assert meta["windows"]["calibration_folds"] == card["windows"]["calibration_folds"] == "5 by frame"
+    assert "calibrated on the training renders' log-odds out of fold (folds 5 by frame)" in text
     # the model as a SUT answers from the windows: P(YES) is the most positive window's
     reader = ReferenceISU(SPACE, model)
     images = sorted((folder / "work" / "held-out").glob("*.png"))

@@ -2,11 +2,13 @@
 
 Alone (``reference train --windows``): a Platt fit of the training frames' answers on their best window's log-odds.
 With a detector (``--detector``, ``detector.py``): a logistic fit on two log-odds per frame, the best window's and
-the detector's (stacking). The window's must then be *out of fold*: a head's log-odds on frames it was fitted on are
-far surer than on frames it never saw, and a stacker fitted on them trusts the head blindly (measured with the
-whole-frame head as the second input: held-out phone AUC 0.70-0.85 fitted in-sample, 0.91-0.95 out of fold). So the
-training frames are split into ``FOLDS`` by frame, and each frame is scored by a window head fitted without its
-fold. The detector was never fitted on the renders, so its scores need no folds.
+the detector's (stacking). Either way the window's log-odds are *out of fold*: a head's log-odds on frames it was
+fitted on are far surer than on frames it never saw. A stacker fitted on them trusts the head blindly (measured with
+the whole-frame head as the second input: held-out phone AUC 0.70-0.85 fitted in-sample, 0.91-0.95 out of fold), and
+a head calibrated alone on them sets its threshold where frames it never saw seldom reach. So the training frames
+are split into folds (``Folds``: by viewpoint when the renders come through several rigs, else ``FOLDS`` by frame),
+and each frame is scored by a window head fitted without its fold. The detector was never fitted on the renders, so
+its scores need no folds.
 """
 from __future__ import annotations
 
@@ -65,7 +67,7 @@ def folds(n: int, seed: int) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)   # it holds an array: no field-by-field ==
 class Folds:
-    """The stacking's folds: each training frame's fold, and the viewpoint each fold is (() when folds are by
+    """The calibration's folds: each training frame's fold, and the viewpoint each fold is (() when folds are by
     frame)."""
     of: np.ndarray
     viewpoints: tuple[str, ...] = ()

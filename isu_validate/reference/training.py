@@ -28,7 +28,7 @@ from .fine_tune import WEIGHTS_FILE, FineTune, fine_tune_backbone, save_tuned
 from .heads import CLIP_SIGMA, REGULARISATION_C, Head, fit_head, save_heads
 from .detector import FrameDetector
 from .stacking import FOLDS
-from .windows import WindowSettings, fit_window_heads, frame_probabilities, save_held_out, stacking_folds
+from .windows import WindowSettings, calibration_folds, fit_window_heads, frame_probabilities, save_held_out
 from ..errors import InputError
 
 
@@ -239,12 +239,13 @@ def _fit_windows(space: SceneSpace, settings: WindowSettings, backbone: Backbone
 
     started = time.time()
     labels = [read_label(e.image) for e in train]
-    plan = stacking_folds(labels, seed)
+    plan = calibration_folds(labels, seed)
     heads, calibration, counts, training_read = fit_window_heads(
         space, settings, backbone, [e.image for e in train], [e.scene for e in train], labels, seed, detector, plan)
     whole = card["held_out_by_preset"]
     card["windows"] = {**settings.describe(), "calibration": {n: c.describe() for n, c in calibration.items()},
-                       **({"detector": detector.describe(), "stacking_folds": plan.describe()} if detector else {}),
+                       "calibration_folds": plan.describe(),
+                       **({"detector": detector.describe()} if detector else {}),
                        "training_windows": counts,
                        "whole_frame_held_out": {n: whole[card["render_preset"]]["per_feature"].get(n)
                                                 for n in settings.features}}
@@ -314,7 +315,7 @@ def write_model(out: Path, heads: list[Head], card: dict, bank: list[FeatureSet]
     names the file)."""
     meta = {k: card[k] for k in ("backbone", "input_size", "space", "space_hash", "seed")}
     if window_heads:
-        kept = ("features", "height", "cells", "calibration", "detector", "stacking_folds")
+        kept = ("features", "height", "cells", "calibration", "calibration_folds", "detector", "stacking_folds")
         meta["windows"] = {k: card["windows"][k] for k in kept if k in card["windows"]}
     if detector is not None:   # the model folder carries its detector, as it carries a tuned backbone
         detector.detector.copy_into(out)
@@ -438,8 +439,18 @@ def _window_lines(windows: dict | None) -> list[str]:
             f"{windows['cells']}x{windows['cells']}-cell window of the backbone's map of the frame scaled to {h} px "
             f"high, its aspect kept (trained on the render labels' part boxes; windows: {counts}); their rows below "
             "are the window heads'. "
-            f"The whole-frame heads' held-out accuracy: {before or '-'}",
-            *_detector_lines(windows.get("detector"), windows.get("stacking_folds", f"{FOLDS} by frame"))]
+            f"The whole-frame heads' held-out accuracy: {before or '-'}. {_calibration_line(windows)}",
+            *_detector_lines(windows.get("detector"),
+                             windows.get("calibration_folds") or windows.get("stacking_folds", f"{FOLDS} by frame"))]
+
+
+def _calibration_line(windows: dict) -> str:
+    """How the window heads' log-odds became probabilities; models fitted before ``calibration_folds`` was recorded
+    calibrated a head that stands alone on its own training frames."""
+    if "calibration_folds" in windows:
+        return ("Each head is calibrated on the training renders' log-odds out of fold (folds "
+                f"{windows['calibration_folds']}): a head fitted without the frame's fold scores it")
+    return "A head calibrated alone was calibrated on its own training frames' log-odds (in sample)"
 
 
 def _detector_lines(detector: dict | None, stacking_folds: str) -> list[str]:

@@ -118,8 +118,8 @@ def _overlaps(a, b) -> bool:
     return not (a[2] <= b[0] or a[0] >= b[2] or a[3] <= b[1] or a[1] >= b[3])
 
 
-def stacking_folds(labels: list[dict | None], seed: int) -> Folds:
-    """The stacking's folds for training renders with these labels: by the camera rig each was seen through (its
+def calibration_folds(labels: list[dict | None], seed: int) -> Folds:
+    """The calibration's folds for training renders with these labels: by the camera rig each was seen through (its
     label's camera name; jittered frames keep their rig's) when there are several (``Folds.plan``)."""
     return Folds.plan([((label or {}).get("camera") or {}).get("name") for label in labels], seed)
 
@@ -129,13 +129,14 @@ def fit_window_heads(space, settings: WindowSettings, backbone: Backbone, images
                      fold_plan: Folds | None = None) -> tuple[list[Head], dict[str, Stacking], dict, list[dict]]:
     """One window head per feature of ``settings`` from the training renders (``scenes``: their labels less what
     the frame hid; ``labels``: their render labels, the boxes), and how a frame's best window makes its probability:
-    calibrated alone, or stacked with ``detector`` (``stacking.py``, out of the folds of ``fold_plan``, by default
-    ``stacking_folds`` of the labels); (heads, stackings, how many windows each learnt from, the class
-    probabilities per training frame: {} where not asked).
+    calibrated alone, or stacked with ``detector`` (``stacking.py``), on log-odds out of the folds of ``fold_plan``
+    (by default ``calibration_folds`` of the labels); (heads, calibrations, how many windows each learnt from, the
+    class probabilities per training frame: {} where not asked).
 
     The calibration: a frame's best window is the most positive of some 200, so its raw probability says YES to
     frames without the thing far more often than one window would. A logistic fit of the training frames' answers
-    on their best window's log-odds (with the detector's beside them) turns it into the frame's probability."""
+    on their best window's log-odds out of fold (with the detector's beside them) turns it into the frame's
+    probability."""
     # one stream per feature, so that a feature's windows do not change with the other features asked for
     rngs = {name: np.random.default_rng([seed, zlib.crc32(name.encode())]) for name in settings.features}
     examples: dict[str, list[tuple[int, np.ndarray, str]]] = {name: [] for name in settings.features}
@@ -155,11 +156,11 @@ def fit_window_heads(space, settings: WindowSettings, backbone: Backbone, images
     counts = {name: {answer: sum(e[2] == answer for e in rows) for answer in ("YES", "NO")}
               for name, rows in examples.items()}
     heads = [_fit_windows_of(name, rows, seed) for name, rows in examples.items()]
-    plan = fold_plan if fold_plan is not None else stacking_folds(labels, seed)
+    plan = fold_plan if fold_plan is not None else calibration_folds(labels, seed)
     fold_of = plan.of
     stacked = {name for name in examples if detector and name in detector.classes}   # the others: calibrated alone
     fold_heads = {name: [_fit_windows_of(name, [e for e in rows if fold_of[e[0]] != k], seed) for k in range(len(plan))]
-                  for name, rows in examples.items() if name in stacked}
+                  for name, rows in examples.items()}
     # a second pass over the frames: the calibration needs the fitted heads, and keeping every frame's map from the
     # first pass would hold about 1 MB a frame (600 MB for 600 renders) to save a minute
     read_frames = [_read_training_frame(settings, backbone, heads, fold_heads, fold_of[i], image, scene, detector)
@@ -170,9 +171,9 @@ def fit_window_heads(space, settings: WindowSettings, backbone: Backbone, images
         name, feature = head.feature, space.features[head.feature]
         rows = [i for i, frame in enumerate(read_frames) if name in frame]
         truth = np.array([feature.truth(scenes[i][name]) == "YES" for i in rows])
-        # stacked with a detector, the window's log-odds are out of fold (stacking.py); alone, as fitted
-        window = np.array([read_frames[i][name].out_of_fold if name in stacked else read_frames[i][name].window
-                           for i in rows])
+        # calibrated on log-odds out of fold, alone or stacked: in sample the head is far surer than on frames it
+        # never saw, and a calibration fitted there sets its threshold where no photo reaches (stacking.py)
+        window = np.array([read_frames[i][name].out_of_fold for i in rows])
         seen = np.array([read_frames[i][name].detector for i in rows]) if name in stacked else None
         stackings[name] = fit_stacking(name, window, seen, truth)
         for i in rows:
@@ -185,16 +186,16 @@ def _fit_windows_of(name: str, rows: list[tuple[int, np.ndarray, str]], seed: in
     answers = [e[2] for e in rows]
     yes, no = answers.count("YES"), answers.count("NO")
     if not yes or not no:
-        raise InputError(f"--windows {name}: the training renders (or, with --detector, those left when a fold, a "
-                         f"fifth of them or one viewpoint's, is left out to stack it) give {yes} windows that show it "
-                         f"and {no} that do not; both are needed: use a larger --n")
+        raise InputError(f"--windows {name}: the training renders (or those left when a fold, a fifth of them or "
+                         f"one viewpoint's, is left out to calibrate it) give {yes} windows that show it and {no} "
+                         f"that do not; both are needed: use a larger --n")
     return fit_head(name, np.stack([e[1] for e in rows]), answers, seed=seed)
 
 
 class TrainingRead(NamedTuple):
     """One training frame's log-odds of one feature."""
     window: float                 # the best window's, by the head fitted on every frame
-    out_of_fold: float | None     # the best window's, by the head fitted without the frame's fold (if stacked)
+    out_of_fold: float            # the best window's, by the head fitted without the frame's fold
     detector: float               # the detector's (0 without one)
 
 
@@ -208,9 +209,7 @@ def _read_training_frame(settings: WindowSettings, backbone: Backbone, heads: li
     rgb = read_rgb(image)
     flat = _flat(settings.maps(backbone, rgb))
     seen = detector.log_odds(rgb, [h.feature for h in asked]) if detector else {}
-    return {h.feature: TrainingRead(_best_log_odds(h, flat),
-                                    _best_log_odds(fold_heads[h.feature][fold], flat) if h.feature in fold_heads
-                                    else None,
+    return {h.feature: TrainingRead(_best_log_odds(h, flat), _best_log_odds(fold_heads[h.feature][fold], flat),
                                     seen.get(h.feature, 0.0)) for h in asked}
 
 
