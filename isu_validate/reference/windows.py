@@ -172,7 +172,7 @@ def fit_window_heads(space, settings: WindowSettings, backbone: Backbone, images
         rows = [i for i, frame in enumerate(read_frames) if name in frame]
         truth = np.array([feature.truth(scenes[i][name]) == "YES" for i in rows])
         # calibrated on log-odds out of fold, alone or stacked: in sample the head is far surer than on frames it
-        # never saw, and a calibration fitted there sets its threshold where no photo reaches (stacking.py)
+        # never saw, and a calibration fitted there sets its threshold where unseen frames seldom reach (stacking.py)
         window = np.array([read_frames[i][name].out_of_fold for i in rows])
         seen = np.array([read_frames[i][name].detector for i in rows]) if name in stacked else None
         stackings[name] = fit_stacking(name, window, seen, truth)
