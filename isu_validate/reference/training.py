@@ -315,7 +315,7 @@ def write_model(out: Path, heads: list[Head], card: dict, bank: list[FeatureSet]
     names the file)."""
     meta = {k: card[k] for k in ("backbone", "input_size", "space", "space_hash", "seed")}
     if window_heads:
-        kept = ("features", "height", "cells", "calibration", "calibration_folds", "detector", "stacking_folds")
+        kept = ("features", "height", "cells", "calibration", "calibration_folds", "detector")
         meta["windows"] = {k: card["windows"][k] for k in kept if k in card["windows"]}
     if detector is not None:   # the model folder carries its detector, as it carries a tuned backbone
         detector.detector.copy_into(out)
